@@ -1,0 +1,64 @@
+//! Input checks shared by every public constructor and filter step.
+
+use crate::{Error, Real};
+use nalgebra::{Cholesky, SMatrix};
+
+/// Fails with [`Error::NonFinite`] unless `v` is finite.
+#[inline]
+pub(crate) fn finite<T: Real>(v: T, what: &'static str) -> Result<T, Error> {
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(Error::NonFinite { what })
+    }
+}
+
+/// Fails unless `v` is finite and ≥ 0.
+#[inline]
+pub(crate) fn non_negative<T: Real>(v: T, what: &'static str) -> Result<T, Error> {
+    finite(v, what)?;
+    if v < T::zero() {
+        Err(Error::NegativeVariance { what })
+    } else {
+        Ok(v)
+    }
+}
+
+/// Fails unless `v` is finite and > 0.
+#[inline]
+pub(crate) fn positive<T: Real>(v: T, what: &'static str) -> Result<T, Error> {
+    finite(v, what)?;
+    if v > T::zero() {
+        Ok(v)
+    } else {
+        Err(Error::OutOfRange {
+            what,
+            expected: "> 0",
+        })
+    }
+}
+
+/// Checks that `m` is a valid covariance: finite, symmetric (to a relative tolerance
+/// of √ε of its largest entry) and positive definite (Cholesky succeeds).
+pub(crate) fn covariance<T: Real, const N: usize>(
+    m: &SMatrix<T, N, N>,
+    what: &'static str,
+) -> Result<(), Error> {
+    let mut scale = T::zero();
+    for v in m.iter() {
+        finite(*v, what)?;
+        scale = scale.max(v.abs());
+    }
+    let tol = T::default_epsilon().sqrt() * scale;
+    for i in 0..N {
+        for j in (i + 1)..N {
+            if (m[(i, j)] - m[(j, i)]).abs() > tol {
+                return Err(Error::NotSymmetric { what });
+            }
+        }
+    }
+    if Cholesky::new(*m).is_none() {
+        return Err(Error::NotPositiveDefinite { what });
+    }
+    Ok(())
+}
