@@ -1,0 +1,16 @@
+//! Line features from 2-D laser scans, maps of lines, matching against a map, and the
+//! [`Localizer`](localizer) facade that drives one localization step over `ekf-core`.
+//!
+//! `#![no_std]` with `alloc` (unless the default `std` feature is on). Scans are shaped
+//! like ROS `sensor_msgs/LaserScan`; all lengths in metres, angles in radians,
+//! counter-clockwise, in the sensor frame unless a name says otherwise. Computations are
+//! in `f64` (on a Cortex-M4F that runs in software; the per-scan cost stays small).
+#![cfg_attr(not(feature = "std"), no_std)]
+
+extern crate alloc;
+
+pub mod observed;
+pub mod scan;
+
+pub use observed::ObservedLine;
+pub use scan::LaserScan;
