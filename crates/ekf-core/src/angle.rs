@@ -15,6 +15,13 @@ pub fn wrap_angle<T: Real>(a: T) -> T {
     if a > -pi && a <= pi {
         return a;
     }
+    // One turn off (sums and differences of wrapped angles): no division needed.
+    if a > pi && a <= pi + two_pi {
+        return a - two_pi;
+    }
+    if a <= -pi && a > -pi - two_pi {
+        return a + two_pi;
+    }
     // r in [0, 2π) for finite a; then shift to (−π, π].
     let mut r = (a + pi) % two_pi;
     if r < T::zero() {

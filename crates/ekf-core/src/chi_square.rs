@@ -19,7 +19,7 @@ pub fn chi_square_cdf(x: f64, dof: u32) -> f64 {
     }
     let h = 0.5 * x;
     let e = libm::exp(-h);
-    if dof % 2 == 0 {
+    if dof.is_multiple_of(2) {
         let (mut term, mut sum) = (e, 0.0);
         for i in 0..dof / 2 {
             sum += term;

@@ -9,7 +9,7 @@
 use crate::kinematics::{DiffDrive, Motion, WheelSpeeds};
 use crate::measurement::Measurement;
 use crate::noise::{OdometryNoise, WheelNoise};
-use crate::validate::{covariance, finite};
+use crate::validate::{all_finite, covariance, finite};
 use crate::{ChiSquareGate, Error, Pose2, Real};
 use nalgebra::{Cholesky, Matrix3, SMatrix, SVector, Vector3};
 
@@ -75,18 +75,21 @@ impl<T: Real> Ekf<T> {
         &self.p
     }
 
-    /// Generic prediction (eqs. 5–6): `x⁻ = f(x, u)`, `P⁻ = A P Aᵀ + Q_x`, where `Q_x` is the
-    /// process noise already mapped into the state (`W Q Wᵀ`).
-    pub fn predict(&mut self, motion: &Motion<T>, q_state: &Matrix3<T>) -> Result<(), Error> {
+    /// Generic prediction (eqs. 5–6): `x⁻ = f(x, u)`, `P⁻ = A P Aᵀ + G Σ Gᵀ`, where `Σ` is
+    /// the covariance of the motion step in `(Δs, e, Δθ)` (distance, lateral displacement,
+    /// turn) and `G` = [`Motion::noise_jacobian`]. For wheel noise `Σ = J Q Jᵀ` and
+    /// `G Σ Gᵀ = W Q Wᵀ` exactly.
+    pub fn predict(
+        &mut self,
+        motion: &Motion<T>,
+        motion_covariance: &Matrix3<T>,
+    ) -> Result<(), Error> {
         finite(motion.ds, "motion ds")?;
         finite(motion.dtheta, "motion dtheta")?;
-        for v in q_state.iter() {
-            finite(*v, "process noise")?;
-        }
-        let pose = self.pose();
-        let a = motion.state_jacobian(&pose);
-        let p = a * self.p * a.transpose() + q_state;
-        self.x = motion.apply(&pose).to_vector();
+        all_finite(motion_covariance.as_slice(), "motion noise")?;
+        let lin = motion.linearize(&self.pose());
+        let p = lin.a * self.p * lin.a.transpose() + lin.g * motion_covariance * lin.g.transpose();
+        self.x = lin.next.to_vector();
         self.p = symmetrize(&p);
         Ok(())
     }
@@ -102,8 +105,10 @@ impl<T: Real> Ekf<T> {
         finite(speeds.left, "left wheel speed")?;
         finite(speeds.right, "right wheel speed")?;
         finite(speeds.dt, "dt")?;
-        let q = noise.state_covariance(robot, &self.pose(), speeds);
-        self.predict(&robot.motion(speeds), &q)
+        self.predict(
+            &robot.motion(speeds),
+            &noise.motion_covariance(robot, speeds),
+        )
     }
 
     /// Prediction from an odometry delta `(Δs, Δθ)` with the distance/rotation noise
@@ -115,8 +120,7 @@ impl<T: Real> Ekf<T> {
     ) -> Result<(), Error> {
         finite(motion.ds, "motion ds")?;
         finite(motion.dtheta, "motion dtheta")?;
-        let q = noise.state_covariance(&self.pose(), motion);
-        self.predict(motion, &q)
+        self.predict(motion, &noise.motion_covariance(motion))
     }
 
     /// The innovation of a measurement at the current estimate, without changing the
@@ -126,16 +130,12 @@ impl<T: Real> Ekf<T> {
         m: &Z,
     ) -> Result<Innovation<T, M>, Error> {
         let z = m.measured();
-        for v in z.iter() {
-            finite(*v, "measurement")?;
-        }
+        all_finite(z.as_slice(), "measurement")?;
         let r = m.noise();
         covariance(&r, "measurement noise")?;
         let (z_hat, h) = m.predict(&self.pose());
         let y = m.residual(&z, &z_hat);
-        for v in y.iter() {
-            finite(*v, "innovation")?;
-        }
+        all_finite(y.as_slice(), "innovation")?;
         let s = symmetrize(&(h * self.p * h.transpose() + r));
         let s_inv = Cholesky::new(s)
             .ok_or(Error::NotPositiveDefinite {
@@ -188,9 +188,8 @@ impl<T: Real> Ekf<T> {
         let x = self.x + k * inn.y;
         let i_kh = Matrix3::identity() - k * inn.h;
         let p = symmetrize(&(i_kh * self.p * i_kh.transpose() + k * inn.r * k.transpose()));
-        for v in x.iter().chain(p.iter()) {
-            finite(*v, "updated state")?;
-        }
+        all_finite(x.as_slice(), "updated state")?;
+        all_finite(p.as_slice(), "updated covariance")?;
         self.x = Pose2::from_vector(&x).to_vector();
         self.p = p;
         Ok(())

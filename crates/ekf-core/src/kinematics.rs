@@ -85,21 +85,21 @@ impl<T: Real> DiffDrive<T> {
         }
     }
 
+    /// `J = ∂(Δs, e, Δθ)/∂(ω_R, ω_L) = [[ΔtR/2, ΔtR/2], [0, 0], [ΔtR/L, −ΔtR/L]]`: how
+    /// wheel-speed errors move the motion step (`e` is the lateral displacement, which
+    /// wheel speeds cannot cause).
+    pub fn wheel_to_motion_jacobian(&self, dt: T) -> Matrix3x2<T> {
+        let half = dt * self.wheel_radius * T::lit(0.5);
+        let turn = dt * self.wheel_radius / self.track;
+        Matrix3x2::new(half, half, T::zero(), T::zero(), turn, -turn)
+    }
+
     /// The corrected input Jacobian `W = ∂f/∂(ω_R, ω_L)` of eq. 8 (DESIGN erratum 1:
-    /// the third row is `(Δt·R/L, −Δt·R/L)`, twice the paper's printed value). Columns are
-    /// ordered `(ω_R, ω_L)` as in the paper's `Q = diag(δω_R², δω_L²)`.
+    /// the third row is `(Δt·R/L, −Δt·R/L)`, twice the paper's printed value), computed as
+    /// `W = G·J` ([`Motion::noise_jacobian`], [`DiffDrive::wheel_to_motion_jacobian`]).
+    /// Columns are ordered `(ω_R, ω_L)` as in the paper's `Q = diag(δω_R², δω_L²)`.
     pub fn input_jacobian(&self, pose: &Pose2<T>, w: &WheelSpeeds<T>) -> Matrix3x2<T> {
-        let m = self.motion(w);
-        let g = m.noise_jacobian(pose);
-        let half = w.dt * self.wheel_radius * T::lit(0.5);
-        let turn = w.dt * self.wheel_radius / self.track;
-        // ∂(Δs, Δθ)/∂(ω_R, ω_L) = [[ΔtR/2, ΔtR/2], [ΔtR/L, −ΔtR/L]].
-        let ds_col = g.column(0);
-        let dth_col = g.column(2);
-        Matrix3x2::from_columns(&[
-            ds_col * half + dth_col * turn,
-            ds_col * half - dth_col * turn,
-        ])
+        self.motion(w).noise_jacobian(pose) * self.wheel_to_motion_jacobian(w.dt)
     }
 }
 
@@ -127,19 +127,12 @@ impl<T: Real> Motion<T> {
     /// The motion model `f` (eq. 3): the pose advances `Δs` along the mid-angle
     /// `θ + Δθ/2`, then turns by `Δθ`.
     pub fn apply(&self, pose: &Pose2<T>) -> Pose2<T> {
-        let mid = pose.theta + self.dtheta * T::lit(0.5);
-        Pose2::new(
-            pose.x + self.ds * mid.cos(),
-            pose.y + self.ds * mid.sin(),
-            pose.theta + self.dtheta,
-        )
+        self.linearize(pose).next
     }
 
     /// The state Jacobian `A = ∂f/∂(x, y, θ)` (eq. 7).
     pub fn state_jacobian(&self, pose: &Pose2<T>) -> Matrix3<T> {
-        let (s, c) = (pose.theta + self.dtheta * T::lit(0.5)).sin_cos();
-        let (o, i) = (T::zero(), T::one());
-        Matrix3::new(i, o, -self.ds * s, o, i, self.ds * c, o, o, i)
+        self.linearize(pose).a
     }
 
     /// `G = ∂f/∂(Δs, e, Δθ)`: the Jacobian of the motion model with respect to the
@@ -147,11 +140,35 @@ impl<T: Real> Motion<T> {
     /// (zero in the nominal model), and the turn `Δθ`. Process noise in those three
     /// quantities maps into the state as `G Σ Gᵀ`.
     pub fn noise_jacobian(&self, pose: &Pose2<T>) -> Matrix3<T> {
-        let (s, c) = (pose.theta + self.dtheta * T::lit(0.5)).sin_cos();
-        let half = self.ds * T::lit(0.5);
-        let (o, i) = (T::zero(), T::one());
-        Matrix3::new(c, -s, -half * s, s, c, half * c, o, o, i)
+        self.linearize(pose).g
     }
+
+    /// `f`, `A` and `G` at `pose` together, with one sine and cosine of the mid-angle.
+    pub fn linearize(&self, pose: &Pose2<T>) -> Linearization<T> {
+        let (s, c) = (pose.theta + self.dtheta * T::lit(0.5)).sin_cos();
+        let (o, i) = (T::zero(), T::one());
+        let half = self.ds * T::lit(0.5);
+        Linearization {
+            next: Pose2::new(
+                pose.x + self.ds * c,
+                pose.y + self.ds * s,
+                pose.theta + self.dtheta,
+            ),
+            a: Matrix3::new(i, o, -self.ds * s, o, i, self.ds * c, o, o, i),
+            g: Matrix3::new(c, -s, -half * s, s, c, half * c, o, o, i),
+        }
+    }
+}
+
+/// The motion model and its Jacobians at one pose.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Linearization<T> {
+    /// `f(x, u)`: the pose after the motion (eq. 3).
+    pub next: Pose2<T>,
+    /// `A = ∂f/∂(x, y, θ)` (eq. 7).
+    pub a: Matrix3<T>,
+    /// `G = ∂f/∂(Δs, e, Δθ)` (see [`Motion::noise_jacobian`]).
+    pub g: Matrix3<T>,
 }
 
 #[cfg(test)]

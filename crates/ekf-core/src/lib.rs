@@ -59,7 +59,7 @@ pub use chi_square::{chi_square_cdf, chi_square_quantile, ChiSquareGate};
 pub use ekf::{Ekf, Innovation, UpdateOutcome};
 pub use error::Error;
 pub use geometry::{Line, Pose2};
-pub use kinematics::{DiffDrive, Motion, WheelSpeeds};
+pub use kinematics::{DiffDrive, Linearization, Motion, WheelSpeeds};
 pub use measurement::{
     heading_from_compass_bearing, Compass, CompassCalibration, LaserLine, Measurement, Position,
 };

@@ -138,15 +138,20 @@ impl<T: Real> Measurement<T, 2> for LaserLine<T> {
         Vector2::new(self.observed.rho, self.observed.beta)
     }
     fn predict(&self, pose: &Pose2<T>) -> (Vector2<T>, Matrix2x3<T>) {
-        let sensor = pose.compose(&self.mount);
-        let (sb, cb) = self.map_line.beta.sin_cos();
-        let c = self.map_line.rho - sensor.x * cb - sensor.y * sb;
-        let predicted = self.map_line.to_frame(&sensor);
-        let sign = if c < T::zero() { -T::one() } else { T::one() };
-        // ∂(x_s, y_s)/∂θ for the mounting offset.
         let (st, ct) = pose.theta.sin_cos();
-        let dxs = -st * self.mount.x - ct * self.mount.y;
-        let dys = ct * self.mount.x - st * self.mount.y;
+        let (sb, cb) = self.map_line.beta.sin_cos();
+        let (mx, my) = (self.mount.x, self.mount.y);
+        // The sensor's position in the world, and its derivative with respect to θ.
+        let xs = pose.x + ct * mx - st * my;
+        let ys = pose.y + st * mx + ct * my;
+        let (dxs, dys) = (-st * mx - ct * my, ct * mx - st * my);
+        let c = self.map_line.rho - xs * cb - ys * sb;
+        let psi = self.map_line.beta - pose.theta - self.mount.theta;
+        let (r_hat, psi_hat, sign) = if c < T::zero() {
+            (-c, psi + T::pi(), -T::one())
+        } else {
+            (c, psi, T::one())
+        };
         let dc_dtheta = -(dxs * cb + dys * sb);
         let h = Matrix2x3::new(
             -sign * cb,
@@ -156,7 +161,7 @@ impl<T: Real> Measurement<T, 2> for LaserLine<T> {
             T::zero(),
             -T::one(),
         );
-        (Vector2::new(predicted.rho, predicted.beta), h)
+        (Vector2::new(r_hat, wrap_angle(psi_hat)), h)
     }
     fn noise(&self) -> Matrix2<T> {
         self.covariance

@@ -3,7 +3,7 @@
 
 use crate::kinematics::{DiffDrive, Motion, WheelSpeeds};
 use crate::validate::non_negative;
-use crate::{Error, Pose2, Real};
+use crate::{Error, Real};
 use nalgebra::{Matrix2, Matrix3};
 
 /// Wheel-speed noise: `Q = diag(δ·ω_R² + σ₀², δ·ω_L² + σ₀²)` in (rad/s)².
@@ -48,15 +48,12 @@ impl<T: Real> WheelNoise<T> {
         )
     }
 
-    /// The process noise in the state, `W Q Wᵀ` (eq. 6), with the corrected `W`.
-    pub fn state_covariance(
-        &self,
-        robot: &DiffDrive<T>,
-        pose: &Pose2<T>,
-        w: &WheelSpeeds<T>,
-    ) -> Matrix3<T> {
-        let jw = robot.input_jacobian(pose, w);
-        jw * self.input_covariance(w) * jw.transpose()
+    /// The noise of the motion step `(Δs, e, Δθ)`, `J Q Jᵀ` with `J` from
+    /// [`DiffDrive::wheel_to_motion_jacobian`]; mapped into the state by `G`, this is the
+    /// paper's `W Q Wᵀ` (eq. 6) with the corrected `W = G J`.
+    pub fn motion_covariance(&self, robot: &DiffDrive<T>, w: &WheelSpeeds<T>) -> Matrix3<T> {
+        let j = robot.wheel_to_motion_jacobian(w.dt);
+        j * self.input_covariance(w) * j.transpose()
     }
 }
 
@@ -129,13 +126,11 @@ impl<T: Real> OdometryNoise<T> {
         )
     }
 
-    /// The process noise in the state, `G diag(σ_s², σ_e², σ_θ²) Gᵀ` with `G` from
-    /// [`Motion::noise_jacobian`].
-    pub fn state_covariance(&self, pose: &Pose2<T>, m: &Motion<T>) -> Matrix3<T> {
+    /// The noise of the motion step `(Δs, e, Δθ)`, `diag(σ_s², σ_e², σ_θ²)`; the filter maps
+    /// it into the state with `G` from [`Motion::noise_jacobian`].
+    pub fn motion_covariance(&self, m: &Motion<T>) -> Matrix3<T> {
         let (ss, se, st) = self.sigmas(m);
-        let g = m.noise_jacobian(pose);
-        let d = Matrix3::from_diagonal(&nalgebra::Vector3::new(ss * ss, se * se, st * st));
-        g * d * g.transpose()
+        Matrix3::from_diagonal(&nalgebra::Vector3::new(ss * ss, se * se, st * st))
     }
 }
 

@@ -13,6 +13,16 @@ pub(crate) fn finite<T: Real>(v: T, what: &'static str) -> Result<T, Error> {
     }
 }
 
+/// Fails with [`Error::NonFinite`] unless every entry of `values` is finite.
+#[inline]
+pub(crate) fn all_finite<T: Real>(values: &[T], what: &'static str) -> Result<(), Error> {
+    if values.iter().all(|v| v.is_finite()) {
+        Ok(())
+    } else {
+        Err(Error::NonFinite { what })
+    }
+}
+
 /// Fails unless `v` is finite and ≥ 0.
 #[inline]
 pub(crate) fn non_negative<T: Real>(v: T, what: &'static str) -> Result<T, Error> {
@@ -44,11 +54,8 @@ pub(crate) fn covariance<T: Real, const N: usize>(
     m: &SMatrix<T, N, N>,
     what: &'static str,
 ) -> Result<(), Error> {
-    let mut scale = T::zero();
-    for v in m.iter() {
-        finite(*v, what)?;
-        scale = scale.max(v.abs());
-    }
+    all_finite(m.as_slice(), what)?;
+    let scale = m.amax();
     let tol = T::default_epsilon().sqrt() * scale;
     for i in 0..N {
         for j in (i + 1)..N {

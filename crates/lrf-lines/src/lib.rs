@@ -1,5 +1,5 @@
 //! Line features from 2-D laser scans, maps of lines, matching against a map, and the
-//! [`Localizer`](localizer) facade that drives one localization step over `ekf-core`.
+//! `Localizer` facade that drives one localization step over `ekf-core`.
 //!
 //! `#![no_std]` with `alloc` (unless the default `std` feature is on). Scans are shaped
 //! like ROS `sensor_msgs/LaserScan`; all lengths in metres, angles in radians,

@@ -1,0 +1,69 @@
+//! A predict + update loop performs zero heap allocations (counted by a global allocator).
+
+use core::sync::atomic::{AtomicUsize, Ordering};
+use ekf_core::{
+    ChiSquareGate, Compass, DiffDrive, Ekf, LaserLine, Line, Motion, OdometryNoise, Pose2,
+    WheelNoise, WheelSpeeds,
+};
+use nalgebra::{Matrix2, Matrix3};
+use std::alloc::{GlobalAlloc, Layout, System};
+
+struct Counting;
+static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
+
+// SAFETY: forwards to the system allocator unchanged; only counts calls.
+#[allow(unsafe_code)]
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
+        // SAFETY: same contract as the caller's.
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        // SAFETY: same contract as the caller's.
+        unsafe { System.dealloc(ptr, layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
+        // SAFETY: same contract as the caller's.
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+#[test]
+fn predict_update_loop_does_not_allocate() {
+    let robot = DiffDrive::<f64>::paper();
+    let noise = WheelNoise::default();
+    let odo = OdometryNoise::default();
+    let gate1 = ChiSquareGate::from_probability(0.99, 1).unwrap();
+    let gate2 = ChiSquareGate::from_probability(0.99, 2).unwrap();
+    let wall = Line::new(3.0, 0.0).unwrap();
+    let mount = Pose2::new(0.1, 0.0, -core::f64::consts::FRAC_PI_2);
+    let mut ekf = Ekf::new(Pose2::identity(), Matrix3::from_diagonal_element(1e-3)).unwrap();
+
+    let before = ALLOCATIONS.load(Ordering::SeqCst);
+    let mut accepted = 0;
+    for k in 0..1000 {
+        ekf.predict_wheels(&robot, &WheelSpeeds::new(1.0, 1.1, 0.1).unwrap(), &noise)
+            .unwrap();
+        ekf.predict_odometry(&Motion::new(0.001, 0.0).unwrap(), &odo)
+            .unwrap();
+        let c = Compass::new(ekf.pose().theta + 0.001 * f64::from(k % 3), 1e-3).unwrap();
+        accepted += usize::from(ekf.update(&c, Some(&gate1)).unwrap().accepted);
+        let observed = wall.to_frame(&ekf.pose().compose(&mount));
+        let m =
+            LaserLine::new(observed, Matrix2::from_diagonal_element(1e-4), wall, mount).unwrap();
+        accepted += usize::from(ekf.update(&m, Some(&gate2)).unwrap().accepted);
+    }
+    let after = ALLOCATIONS.load(Ordering::SeqCst);
+    assert_eq!(
+        after - before,
+        0,
+        "the filter allocated {} times",
+        after - before
+    );
+    assert_eq!(accepted, 2000);
+}
