@@ -1,0 +1,3 @@
+//! `ekf`: localization from wheel odometry, a compass and laser lines. See `ekf --help`.
+
+fn main() {}
