@@ -3,5 +3,6 @@
 //! nothing in this library prints or exits.
 
 pub mod eval;
+pub mod plot;
 pub mod trajectory;
 pub mod tum;
