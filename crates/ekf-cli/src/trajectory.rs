@@ -63,16 +63,6 @@ impl Trajectory {
     pub fn iter(&self) -> std::slice::Iter<'_, StampedPose> {
         self.samples.iter()
     }
-
-    /// The stamps in order (nanoseconds).
-    pub fn stamps_ns(&self) -> Vec<u64> {
-        self.samples.iter().map(|s| s.t_ns).collect()
-    }
-
-    /// Whether the stamps never decrease.
-    pub fn is_sorted_by_time(&self) -> bool {
-        self.samples.windows(2).all(|w| w[0].t_ns <= w[1].t_ns)
-    }
 }
 
 impl From<Vec<StampedPose>> for Trajectory {

@@ -2,6 +2,7 @@
 //! include every finite point.
 
 use super::{PlotError, PlotOptions};
+use plotters::coord::ranged1d::ValueFormatter;
 use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -116,9 +117,20 @@ pub(super) fn build_chart<'a, 'b>(
         .y_desc(y_desc)
         .axis_desc_style(("sans-serif", LABEL_SIZE))
         .label_style(("sans-serif", TICK_SIZE))
+        .x_label_formatter(&tick_label)
+        .y_label_formatter(&tick_label)
         .max_light_lines(0)
         .draw()?;
     Ok(chart)
+}
+
+/// A tick label as `plotters` prints it, but never `-0.0` for a tick at zero.
+fn tick_label(value: &f64) -> String {
+    let text = RangedCoordf64::format(value);
+    match text.strip_prefix('-') {
+        Some(unsigned) if unsigned.parse::<f64>() == Ok(0.0) => unsigned.to_owned(),
+        _ => text,
+    }
 }
 
 /// Draws one named series as a single line (one SVG `<polyline>`) with a legend entry;
@@ -187,6 +199,13 @@ mod tests {
         assert!((per_px_x - per_px_y).abs() < 1e-12);
         assert_eq!(x, 0.0..10.0);
         assert!((0.5 * (y.start + y.end)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn tick_labels_have_no_negative_zero() {
+        assert_eq!(tick_label(&-1e-17), "0.0");
+        assert_eq!(tick_label(&-0.5), "-0.5");
+        assert_eq!(tick_label(&2.0), "2.0");
     }
 
     #[test]
