@@ -14,11 +14,16 @@ fn golden(name: &str) -> PathBuf {
         .join(name)
 }
 
-fn inputs() -> (Trajectory, Trajectory) {
-    (
-        read_tum_file(&golden("evo_ref.txt")).unwrap(),
-        read_tum_file(&golden("evo_est.txt")).unwrap(),
-    )
+/// (reference, estimate); `swapped` exchanges the files, as the `*_swapped` cases do,
+/// so that the other trajectory is the shorter one that drives the association.
+fn inputs(swapped: bool) -> (Trajectory, Trajectory) {
+    let a = read_tum_file(&golden("evo_ref.txt")).unwrap();
+    let b = read_tum_file(&golden("evo_est.txt")).unwrap();
+    if swapped {
+        (b, a)
+    } else {
+        (a, b)
+    }
 }
 
 fn expected(case: &str) -> Value {
@@ -39,7 +44,7 @@ fn assert_stats(case: &str, what: &str, ours: &Statistics, theirs: &Value) {
 }
 
 fn check_ape(case: &str, alignment: AlignmentOptions) {
-    let (reference, estimate) = inputs();
+    let (reference, estimate) = inputs(case.ends_with("_swapped"));
     let options = ApeOptions {
         alignment,
         ..ApeOptions::default()
@@ -66,7 +71,7 @@ fn check_ape(case: &str, alignment: AlignmentOptions) {
 }
 
 fn check_rpe(case: &str, delta_frames: usize, all_pairs: bool) {
-    let (reference, estimate) = inputs();
+    let (reference, estimate) = inputs(case.ends_with("_swapped"));
     let options = RpeOptions {
         delta_frames,
         all_pairs,
@@ -96,6 +101,7 @@ fn check_rpe(case: &str, delta_frames: usize, all_pairs: bool) {
 #[test]
 fn ape_without_alignment_equals_evo() {
     check_ape("ape_none", AlignmentOptions::default());
+    check_ape("ape_none_swapped", AlignmentOptions::default());
 }
 
 #[test]
@@ -136,4 +142,5 @@ fn rpe_equals_evo() {
     check_rpe("rpe_delta_1", 1, false);
     check_rpe("rpe_delta_3", 3, false);
     check_rpe("rpe_delta_3_all_pairs", 3, true);
+    check_rpe("rpe_delta_1_swapped", 1, false);
 }
