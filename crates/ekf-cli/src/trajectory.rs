@@ -24,11 +24,6 @@ impl StampedPose {
     pub fn new(t_ns: u64, pose: Pose2<f64>) -> Self {
         Self { t_ns, pose }
     }
-
-    /// The stamp in seconds, `t_ns · 10⁻⁹` (for plots; lossy beyond about 2⁵³ ns).
-    pub fn t_sec(&self) -> f64 {
-        self.t_ns as f64 * 1e-9
-    }
 }
 
 /// A sequence of stamped planar poses.
