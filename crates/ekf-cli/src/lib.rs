@@ -1,3 +1,8 @@
 //! The library behind the `ekf` command: ROS 2 MCAP input and output, log importers,
 //! trajectory evaluation and plots. `main.rs` only parses arguments and calls in here;
 //! nothing in this library prints or exits.
+
+pub mod eval;
+pub mod plot;
+pub mod trajectory;
+pub mod tum;

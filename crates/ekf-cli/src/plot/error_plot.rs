@@ -1,0 +1,51 @@
+//! Errors over time: several named series (e.g. the position error of each estimate, or
+//! its x and y error as the paper's Fig. 10) against time.
+
+use super::axes::{build_chart, colour, draw_legend, draw_series, padded_range, render};
+use super::{PlotError, PlotOptions};
+use std::io::Write;
+
+/// A named series of `(stamp in ns, value)` points, e.g. from
+/// [`crate::eval::Ape::errors`]: `ape.errors.iter().map(|e| (e.t_ns, e.dx))`.
+#[derive(Debug, Clone, Copy)]
+pub struct TimeSeries<'a> {
+    /// Legend name.
+    pub name: &'a str,
+    /// The points, `(t_ns, value)`.
+    pub points: &'a [(u64, f64)],
+}
+
+/// Plots each series as a line of value against time and writes the SVG to `writer`.
+///
+/// The time axis is in seconds since the earliest stamp of all series (computed from
+/// the integer stamps, so large epochs lose no precision); `y_desc` labels the value
+/// axis (e.g. `"position error [m]"`). Each series is one `<polyline>` with a legend
+/// entry, coloured in order. Fails with [`PlotError::NoData`] if no series has a
+/// finite value.
+pub fn plot_errors_over_time<W: Write>(
+    writer: W,
+    series: &[TimeSeries<'_>],
+    y_desc: &str,
+    options: &PlotOptions,
+) -> Result<(), PlotError> {
+    let t0 = series
+        .iter()
+        .flat_map(|s| s.points.iter().map(|&(t, _)| t))
+        .min()
+        .ok_or(PlotError::NoData)?;
+    let seconds = |t: u64| (t - t0) as f64 * 1e-9;
+    let values = || series.iter().flat_map(|s| s.points.iter().map(|&(_, v)| v));
+    let y = padded_range(values()).ok_or(PlotError::NoData)?;
+    let times = series
+        .iter()
+        .flat_map(|s| s.points.iter().map(|&(t, _)| seconds(t)));
+    let x = padded_range(times).ok_or(PlotError::NoData)?;
+    render(writer, options, |area| {
+        let mut chart = build_chart(area, "time [s]", y_desc, |_| (x, y))?;
+        for (i, s) in series.iter().enumerate() {
+            let points = s.points.iter().map(|&(t, v)| (seconds(t), v));
+            draw_series(&mut chart, s.name, points, colour(i))?;
+        }
+        draw_legend(&mut chart)
+    })
+}

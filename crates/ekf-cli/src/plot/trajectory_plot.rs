@@ -1,0 +1,54 @@
+//! Trajectories in the x–y plane: the reference and several named estimates, with equal
+//! scales on both axes and a legend.
+
+use super::axes::{
+    build_chart, colour, draw_legend, draw_series, equal_aspect, padded_range, render,
+};
+use super::{PlotError, PlotOptions};
+use crate::trajectory::Trajectory;
+use plotters::style::BLACK;
+use std::io::Write;
+
+/// A trajectory with the name it gets in the legend.
+#[derive(Debug, Clone, Copy)]
+pub struct TrajectorySeries<'a> {
+    /// Legend name.
+    pub name: &'a str,
+    /// The poses; only `(x, y)` is drawn.
+    pub trajectory: &'a Trajectory,
+}
+
+/// Plots `reference` (black) and the `estimates` (coloured in order) as lines in the x–y
+/// plane and writes the SVG to `writer`.
+///
+/// Both axes have the same metres per pixel, so shapes are not distorted; the ranges
+/// cover every finite position. Each trajectory is one `<polyline>` and has a legend
+/// entry with its name. Fails with [`PlotError::NoData`] if no trajectory has a finite
+/// position.
+pub fn plot_trajectories<W: Write>(
+    writer: W,
+    reference: Option<TrajectorySeries<'_>>,
+    estimates: &[TrajectorySeries<'_>],
+    options: &PlotOptions,
+) -> Result<(), PlotError> {
+    let all = || reference.iter().chain(estimates);
+    let positions = || all().flat_map(|s| s.trajectory.iter().map(|p| (p.pose.x, p.pose.y)));
+    let x = padded_range(positions().map(|(x, _)| x)).ok_or(PlotError::NoData)?;
+    let y = padded_range(positions().map(|(_, y)| y)).ok_or(PlotError::NoData)?;
+    render(writer, options, |area| {
+        let mut chart = build_chart(area, "x [m]", "y [m]", |size| equal_aspect(x, y, size))?;
+        let xy = |s: &TrajectorySeries<'_>| {
+            s.trajectory
+                .iter()
+                .map(|p| (p.pose.x, p.pose.y))
+                .collect::<Vec<_>>()
+        };
+        if let Some(r) = &reference {
+            draw_series(&mut chart, r.name, xy(r).into_iter(), BLACK)?;
+        }
+        for (i, e) in estimates.iter().enumerate() {
+            draw_series(&mut chart, e.name, xy(e).into_iter(), colour(i))?;
+        }
+        draw_legend(&mut chart)
+    })
+}
