@@ -88,7 +88,7 @@ mod tests {
             sigma_deg: 1.0,
             seed: 1,
         });
-        let c = noise.reading(5, &Pose2::new(0.0, 0.0, 3.14));
+        let c = noise.reading(5, &Pose2::new(0.0, 0.0, core::f64::consts::PI - 1e-4));
         assert!(c.synthetic);
         assert_eq!(c.t_ns, 5);
         assert!(c.heading > -core::f64::consts::PI && c.heading <= core::f64::consts::PI);
