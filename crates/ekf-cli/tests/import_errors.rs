@@ -37,7 +37,7 @@ fn truncated_line_names_the_record_and_field_count() {
     let text = format!("{GOOD_ODOM}# comment\nODOM 1 2\n");
     let (ok, e) = carmen_until_error(text.as_bytes());
     assert_eq!(ok.len(), 1, "the good record before the error is yielded");
-    assert_eq!(e, "line 3: ODOM record: expected 10 fields, the line has 3");
+    assert_eq!(e, "line 3: ODOM: expected 10 fields, the line has 3");
 }
 
 #[test]

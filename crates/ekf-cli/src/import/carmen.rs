@@ -155,7 +155,7 @@ impl CarmenParser {
     }
 
     fn odom(&mut self, f: &Fields, out: &mut Output) -> Result<(), ImportError> {
-        f.expect_len(10, "record")?;
+        f.expect_len(10)?;
         let pose = f.pose(2, ["x", "y", "theta"])?;
         for (field, name) in [(5, "tv"), (6, "rv"), (7, "accel")] {
             f.f64(field, name)?;
@@ -185,7 +185,7 @@ impl CarmenParser {
     fn flaser(&mut self, f: &Fields, out: &mut Output) -> Result<(), ImportError> {
         let n = f.count(2, "num_readings")?;
         let context = format!("declares {n} readings");
-        f.expect_len(n.saturating_add(11), &context)?;
+        f.expect_declared_len(n.saturating_add(11), &context)?;
         let ranges = f.ranges(3, n)?;
         let robot = f.pose(n + 3, ["x", "y", "theta"])?;
         f.pose(n + 6, ["odom_x", "odom_y", "odom_theta"])?;
@@ -209,11 +209,14 @@ impl CarmenParser {
         let n = f.count(9, "num_readings")?;
         let m_field = n.saturating_add(10);
         if f.len() < m_field {
-            return Err(f.count_error(n.saturating_add(24), &format!("declares {n} readings")));
+            return Err(f.count_error(
+                n.saturating_add(24),
+                Some(&format!("declares {n} readings")),
+            ));
         }
         let m = f.count(m_field, "num_remissions")?;
         let context = format!("declares {n} readings and {m} remissions");
-        f.expect_len(n.saturating_add(m).saturating_add(24), &context)?;
+        f.expect_declared_len(n.saturating_add(m).saturating_add(24), &context)?;
         let ranges = f.ranges(10, n)?;
         for field in m_field + 1..=m_field + m {
             f.f64(field, "remission")?;

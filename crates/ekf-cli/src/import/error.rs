@@ -47,14 +47,18 @@ pub enum ImportError {
         found: String,
     },
     /// The line has the wrong number of fields for its record type.
-    #[error("line {line}: {record} {context}: expected {expected} fields, the line has {found}")]
+    #[error(
+        "line {line}: {record}{}: expected {expected} fields, the line has {found}",
+        context.as_deref().map(|c| format!(" {c}")).unwrap_or_default()
+    )]
     FieldCount {
         /// 1-based line number.
         line: u64,
         /// Record tag.
         record: String,
-        /// Why that many fields are expected, e.g. `declares 180 readings`.
-        context: String,
+        /// Why that many fields, for records whose length depends on a count in them,
+        /// e.g. `declares 180 readings`.
+        context: Option<String>,
         /// Number of fields the record needs, the tag included.
         expected: usize,
         /// Number of fields the line has.

@@ -44,8 +44,22 @@ impl<'a> Fields<'a> {
         self.tag().unwrap_or("").to_owned()
     }
 
-    /// Fails unless the line has exactly `expected` fields.
-    pub(crate) fn expect_len(&self, expected: usize, context: &str) -> Result<(), ImportError> {
+    /// Fails unless the line has exactly `expected` fields (a fixed layout).
+    pub(crate) fn expect_len(&self, expected: usize) -> Result<(), ImportError> {
+        self.check_len(expected, None)
+    }
+
+    /// Fails unless the line has exactly `expected` fields, as a count in it (`context`,
+    /// e.g. `declares 180 readings`) says.
+    pub(crate) fn expect_declared_len(
+        &self,
+        expected: usize,
+        context: &str,
+    ) -> Result<(), ImportError> {
+        self.check_len(expected, Some(context))
+    }
+
+    fn check_len(&self, expected: usize, context: Option<&str>) -> Result<(), ImportError> {
         if self.len() == expected {
             Ok(())
         } else {
@@ -54,11 +68,11 @@ impl<'a> Fields<'a> {
     }
 
     /// The error for a line with `self.len()` fields where `expected` are needed.
-    pub(crate) fn count_error(&self, expected: usize, context: &str) -> ImportError {
+    pub(crate) fn count_error(&self, expected: usize, context: Option<&str>) -> ImportError {
         ImportError::FieldCount {
             line: self.line,
             record: self.tag_or_empty(),
-            context: context.to_owned(),
+            context: context.map(str::to_owned),
             expected,
             found: self.len(),
         }

@@ -49,7 +49,7 @@ impl<R: BufRead> Iterator for MrptReader<R> {
 struct MrptParser;
 
 fn odom(f: &Fields) -> Result<ImportRecord, ImportError> {
-    f.expect_len(8, "record")?;
+    f.expect_len(8)?;
     let pose = f.pose(2, ["x", "y", "theta"])?;
     for (field, name) in [(5, "v"), (6, "w"), (7, "unused")] {
         f.f64(field, name)?;
@@ -66,7 +66,7 @@ fn rawscan(f: &Fields) -> Result<ImportRecord, ImportError> {
     let mount = f.pose(6, ["sx", "sy", "stheta"])?;
     let needed = n.saturating_add(8);
     if f.len() < needed {
-        return Err(f.count_error(needed, &format!("declares {n} readings")));
+        return Err(f.count_error(needed, Some(&format!("declares {n} readings"))));
     }
     let ranges = f.ranges(9, n)?;
     let mut right_to_left = true;
