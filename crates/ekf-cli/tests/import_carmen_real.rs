@@ -3,9 +3,11 @@
 
 mod import_common;
 
-use ekf_cli::import::{open_log, read_carmen, CarmenOptions, ImportRecord, ImportStats, Scan};
+use ekf_cli::import::{
+    open_log, read_carmen, CarmenFlavour, CarmenOptions, ImportRecord, ImportStats, Odometry, Scan,
+};
 use ekf_core::{wrap_angle, Pose2};
-use import_common::shared_data;
+use import_common::{assert_pose, shared_data};
 use std::collections::HashSet;
 
 /// Everything the ACES log yields, and the stats.
@@ -123,6 +125,54 @@ fn aces_raw_odometry_drifts_from_the_reference() {
     assert!((15.0..20.0).contains(&max_err), "max drift {max_err} m");
     assert!((8.0..11.0).contains(&rmse), "RMSE {rmse} m");
     assert!((3.0..6.0).contains(&final_err), "final drift {final_err} m");
+}
+
+/// The odometry poses the log yields with `flavour`.
+fn aces_odometry(flavour: CarmenFlavour) -> Vec<Odometry> {
+    let reader = open_log(&shared_data("aces-corrected.log.gz")).unwrap();
+    let options = CarmenOptions {
+        flavour,
+        ..CarmenOptions::default()
+    };
+    read_carmen(reader, options)
+        .filter_map(|r| match r.unwrap() {
+            ImportRecord::Odometry(o) => Some(o),
+            _ => None,
+        })
+        .collect()
+}
+
+#[test]
+fn aces_raw_chain_keeps_every_step_but_the_resets() {
+    // Plain: every ODOM as written, the resets (timestamp 0) included.
+    let written = aces_odometry(CarmenFlavour::Plain);
+    let chained = aces_odometry(CarmenFlavour::Auto);
+    assert_eq!(written.len(), 7814);
+    let mut prev_written: Option<Pose2<f64>> = None;
+    let mut chained_iter = chained.iter();
+    let mut prev_chained: Option<Pose2<f64>> = None;
+    for w in &written {
+        if w.t_ns == 0 {
+            prev_written = Some(w.pose); // a reset: its jump is not a motion
+            continue;
+        }
+        let c = chained_iter
+            .next()
+            .expect("one chained record per non-reset ODOM");
+        assert_eq!(c.t_ns, w.t_ns);
+        if let (Some(pw), Some(pc)) = (prev_written, prev_chained) {
+            let step_written = pw.inverse().compose(&w.pose);
+            let step_chained = pc.inverse().compose(&c.pose);
+            assert_pose(
+                &step_chained,
+                (step_written.x, step_written.y, step_written.theta),
+                1e-9,
+            );
+        }
+        prev_written = Some(w.pose);
+        prev_chained = Some(c.pose);
+    }
+    assert!(chained_iter.next().is_none());
 }
 
 #[test]
