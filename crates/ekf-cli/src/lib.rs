@@ -3,6 +3,7 @@
 //! nothing in this library prints or exits.
 
 pub mod eval;
+pub mod import;
 pub mod plot;
 pub mod trajectory;
 pub mod tum;

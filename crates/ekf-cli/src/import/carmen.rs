@@ -1,0 +1,291 @@
+//! The CARMEN text log importer (`ODOM`, `FLASER`, `ROBOTLASER1`), plain or "corrected".
+//!
+//! # Records read
+//!
+//! * `ODOM x y theta tv rv accel timestamp host logger_timestamp` → [`Odometry`].
+//! * `FLASER n r1 .. rn x y theta odom_x odom_y odom_theta timestamp host logger_timestamp`
+//!   → [`Scan`]: the beams go counter-clockwise from the robot's right, beam `i` at
+//!   `−π/2 + i·π/m` with `m = n` rounded down to even (180 or 181 beams → 1°, 360 or 361 →
+//!   0.5°, as GMapping reads CARMEN logs). Checked on the real ACES log: the walls of the
+//!   building line up only with this convention (see `tests/import_carmen_real.rs`). The
+//!   sensor sits at `(robot_frontlaser_offset, 0, 0)` on the robot (a `PARAM`, default 0);
+//!   `range_max` is the `PARAM robot_front_laser_max` if the log has one, else
+//!   [`CarmenOptions::laser_max_range`] (50 m, the ACES laser's).
+//! * `ROBOTLASER1 laser_type start_angle field_of_view angular_resolution maximum_range
+//!   accuracy remission_mode n r1 .. rn m remission1 .. remissionm laser_x laser_y
+//!   laser_theta robot_x robot_y robot_theta laser_tv laser_rv forward_safety_dist
+//!   side_safety_dist turn_axis timestamp host logger_timestamp` → [`Scan`] with
+//!   `angle_min = start_angle`, `angle_increment = angular_resolution`, `range_max =
+//!   maximum_range` and mount `robot⁻¹ ⊕ laser` (both poses are given in the world).
+//! * `#` comments, `PARAM`, `NEFF` and other record types are counted in
+//!   [`ImportStats`](super::ImportStats) and skipped.
+//!
+//! Ranges are kept as they are: readings at `range_max` are invalid and the line
+//! extractor drops them. `range_min` is 0.
+//!
+//! # The "corrected" flavour
+//!
+//! A corrected log is the output of a grid-SLAM run: each scan's robot pose is the
+//! SLAM-corrected pose, and the `ODOM` right after a scan is *reset* to it. Checked on the
+//! ACES log: a reset is exactly the first `ODOM` after a scan whose timestamp is 0 and whose
+//! pose equals the scan's robot pose; all 440 scans are followed by one, and no other
+//! `ODOM` has timestamp 0. The importer then
+//!
+//! * yields each scan's robot pose as a [`Reference`] at the scan's time;
+//! * re-chains the raw odometry: an accumulated pose starts at the first `ODOM`; for each
+//!   consecutive pair of `ODOM` poses `(prev, cur)` the relative motion `prev⁻¹ ⊕ cur` (in
+//!   the robot frame) is composed onto it. The jump from the last `ODOM` before a scan to
+//!   the reset is left out: a reset only becomes the new `prev`, and yields no record.
+//!
+//! With [`CarmenFlavour::Auto`] (the default) a log counts as corrected from its first
+//! reset on: a scan's [`Reference`] is yielded when its reset is seen, so a plain log
+//! yields no references. Before the first reset the chain is the `ODOM` poses exactly,
+//! so a plain log's odometry comes out as it is written.
+
+use super::compass::{CompassNoise, SyntheticCompass};
+use super::error::ImportError;
+use super::fields::Fields;
+use super::record::{ImportRecord, Odometry, Reference, Scan};
+use super::stats::ImportStats;
+use super::stream::{LineParser, Output, RecordStream};
+use ekf_core::Pose2;
+use std::f64::consts::{FRAC_PI_2, PI};
+use std::io::BufRead;
+
+/// Which CARMEN flavour the log is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum CarmenFlavour {
+    /// Corrected if resets are found (see the module docs), else plain.
+    #[default]
+    Auto,
+    /// Corrected: every scan pose is a reference, resets are taken out of the odometry.
+    Corrected,
+    /// Plain: `ODOM` poses are used as they are, no references.
+    Plain,
+}
+
+/// Options of the CARMEN importer.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CarmenOptions {
+    /// Which flavour the log is.
+    pub flavour: CarmenFlavour,
+    /// `range_max` of `FLASER` scans (m) unless a `PARAM robot_front_laser_max` says
+    /// otherwise. Default 50 m (the ACES log's laser).
+    pub laser_max_range: f64,
+    /// Make a synthetic compass reading from every reference pose.
+    pub synthetic_compass: Option<SyntheticCompass>,
+}
+
+impl Default for CarmenOptions {
+    fn default() -> Self {
+        Self {
+            flavour: CarmenFlavour::Auto,
+            laser_max_range: 50.0,
+            synthetic_compass: None,
+        }
+    }
+}
+
+/// Streams the records of a CARMEN log from `reader`; see the module docs for the rules.
+pub fn read_carmen<R: BufRead>(reader: R, options: CarmenOptions) -> CarmenReader<R> {
+    CarmenReader {
+        inner: RecordStream::new(reader, CarmenParser::new(options)),
+    }
+}
+
+/// Iterator over the records of a CARMEN log, made by [`read_carmen`].
+pub struct CarmenReader<R> {
+    inner: RecordStream<R, CarmenParser>,
+}
+
+impl<R: BufRead> CarmenReader<R> {
+    /// What was imported so far; complete once the iterator has returned `None`.
+    pub fn stats(&self) -> &ImportStats {
+        self.inner.stats()
+    }
+}
+
+impl<R: BufRead> Iterator for CarmenReader<R> {
+    type Item = Result<ImportRecord, ImportError>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        self.inner.next()
+    }
+}
+
+/// The raw odometry chain: the last `ODOM` pose as written and the accumulated raw pose.
+#[derive(Debug, Clone, Copy)]
+struct Chain {
+    prev: Pose2<f64>,
+    raw: Pose2<f64>,
+}
+
+/// The state of a CARMEN import between lines.
+struct CarmenParser {
+    flavour: CarmenFlavour,
+    laser_max_range: f64,
+    front_laser_offset: f64,
+    compass: Option<CompassNoise>,
+    /// Time and robot pose of the latest scan not yet followed by an `ODOM`.
+    open_scan: Option<(u64, Pose2<f64>)>,
+    chain: Option<Chain>,
+    reset_seen: bool,
+}
+
+impl CarmenParser {
+    fn new(options: CarmenOptions) -> Self {
+        Self {
+            flavour: options.flavour,
+            laser_max_range: options.laser_max_range,
+            front_laser_offset: 0.0,
+            compass: options.synthetic_compass.map(CompassNoise::new),
+            open_scan: None,
+            chain: None,
+            reset_seen: false,
+        }
+    }
+
+    fn param(&mut self, f: &Fields) -> Result<(), ImportError> {
+        match f.text(2) {
+            Some("robot_front_laser_max") => self.laser_max_range = f.f64(3, "value")?,
+            Some("robot_frontlaser_offset") => self.front_laser_offset = f.f64(3, "value")?,
+            _ => {}
+        }
+        Ok(())
+    }
+
+    fn odom(&mut self, f: &Fields, out: &mut Output) -> Result<(), ImportError> {
+        f.expect_len(10)?;
+        let pose = f.pose(2, ["x", "y", "theta"])?;
+        for (field, name) in [(5, "tv"), (6, "rv"), (7, "accel")] {
+            f.f64(field, name)?;
+        }
+        let t_ns = f.time_ns(8, "timestamp")?;
+        let open_scan = self.open_scan.take();
+        if let Some((scan_ns, scan_pose)) = open_scan.filter(|&(_, p)| t_ns == 0 && p == pose) {
+            out.stats.odometry_resets += 1;
+            let raw = self.chain.map_or(pose, |c| c.raw);
+            self.chain = Some(Chain { prev: pose, raw });
+            self.reset_seen = true;
+            if self.flavour == CarmenFlavour::Auto {
+                self.reference(scan_ns, scan_pose, out);
+            }
+            return Ok(());
+        }
+        let raw = match self.chain {
+            Some(c) if self.reset_seen => c.raw.compose(&c.prev.inverse().compose(&pose)),
+            _ => pose,
+        };
+        self.chain = Some(Chain { prev: pose, raw });
+        out.queue
+            .push_back(ImportRecord::Odometry(Odometry { t_ns, pose: raw }));
+        Ok(())
+    }
+
+    fn flaser(&mut self, f: &Fields, out: &mut Output) -> Result<(), ImportError> {
+        let n = f.count(2, "num_readings")?;
+        let context = format!("declares {n} readings");
+        f.expect_declared_len(n.saturating_add(11), &context)?;
+        let ranges = f.ranges(3, n)?;
+        let robot = f.pose(n + 3, ["x", "y", "theta"])?;
+        f.pose(n + 6, ["odom_x", "odom_y", "odom_theta"])?;
+        let t_ns = f.time_ns(n + 9, "timestamp")?;
+        f.time_ns(n + 11, "logger_timestamp")?;
+        let span = (n - n % 2).max(1) as f64;
+        let scan = Scan {
+            t_ns,
+            angle_min: -FRAC_PI_2,
+            angle_increment: PI / span,
+            range_min: 0.0,
+            range_max: self.laser_max_range,
+            ranges,
+            mount: Pose2::new(self.front_laser_offset, 0.0, 0.0),
+        };
+        self.scan(scan, robot, out);
+        Ok(())
+    }
+
+    fn robotlaser(&mut self, f: &Fields, out: &mut Output) -> Result<(), ImportError> {
+        let n = f.count(9, "num_readings")?;
+        let m_field = n.saturating_add(10);
+        if f.len() < m_field {
+            return Err(f.count_error(
+                n.saturating_add(24),
+                Some(&format!("declares {n} readings")),
+            ));
+        }
+        let m = f.count(m_field, "num_remissions")?;
+        let context = format!("declares {n} readings and {m} remissions");
+        f.expect_declared_len(n.saturating_add(m).saturating_add(24), &context)?;
+        let ranges = f.ranges(10, n)?;
+        for field in m_field + 1..=m_field + m {
+            f.f64(field, "remission")?;
+        }
+        let k = m_field + m + 1;
+        let laser = f.pose(k, ["laser_pose_x", "laser_pose_y", "laser_pose_theta"])?;
+        let robot = f.pose(k + 3, ["robot_pose_x", "robot_pose_y", "robot_pose_theta"])?;
+        let names = [
+            "laser_tv",
+            "laser_rv",
+            "forward_safety_dist",
+            "side_safety_dist",
+            "turn_axis",
+        ];
+        for (i, name) in names.into_iter().enumerate() {
+            f.f64(k + 6 + i, name)?;
+        }
+        let t_ns = f.time_ns(k + 11, "timestamp")?;
+        f.time_ns(k + 13, "logger_timestamp")?;
+        let scan = Scan {
+            t_ns,
+            angle_min: f.f64(3, "start_angle")?,
+            angle_increment: f.f64(5, "angular_resolution")?,
+            range_min: 0.0,
+            range_max: f.f64(6, "maximum_range")?,
+            ranges,
+            mount: robot.inverse().compose(&laser),
+        };
+        self.scan(scan, robot, out);
+        Ok(())
+    }
+
+    fn scan(&mut self, scan: Scan, robot: Pose2<f64>, out: &mut Output) {
+        let t_ns = scan.t_ns;
+        out.queue.push_back(ImportRecord::Scan(scan));
+        if self.flavour == CarmenFlavour::Corrected {
+            self.reference(t_ns, robot, out);
+        }
+        if self.flavour != CarmenFlavour::Plain {
+            self.open_scan = Some((t_ns, robot));
+        }
+    }
+
+    fn reference(&mut self, t_ns: u64, pose: Pose2<f64>, out: &mut Output) {
+        out.queue
+            .push_back(ImportRecord::Reference(Reference { t_ns, pose }));
+        if let Some(noise) = &mut self.compass {
+            out.queue
+                .push_back(ImportRecord::Compass(noise.reading(t_ns, &pose)));
+        }
+    }
+}
+
+impl LineParser for CarmenParser {
+    fn parse_line(&mut self, line: u64, text: &str, out: &mut Output) -> Result<(), ImportError> {
+        let f = Fields::new(line, text);
+        match f.tag() {
+            None => {}
+            Some(tag) if tag.starts_with('#') => out.stats.comment_lines += 1,
+            Some("PARAM") => {
+                out.stats.param_lines += 1;
+                self.param(&f)?;
+            }
+            Some("NEFF") => out.stats.neff_lines += 1,
+            Some("ODOM") => self.odom(&f, out)?,
+            Some("FLASER") => self.flaser(&f, out)?,
+            Some("ROBOTLASER1") => self.robotlaser(&f, out)?,
+            Some(_) => out.stats.unknown_lines += 1,
+        }
+        Ok(())
+    }
+}

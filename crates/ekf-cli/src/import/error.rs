@@ -1,0 +1,67 @@
+//! The one error type of the importers: every variant names the line, and where a field
+//! is at fault, the record type, the field and what was expected.
+
+use thiserror::Error;
+
+/// Why an import stopped. Field numbers count whitespace-separated words from 1, the
+/// record tag being field 1 (as awk's `$k`).
+#[derive(Debug, Error)]
+pub enum ImportError {
+    /// Reading from the source failed.
+    #[error("line {line}: read failed: {source}")]
+    Io {
+        /// 1-based line number being read.
+        line: u64,
+        /// The underlying I/O error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The line is not UTF-8 text.
+    #[error("line {line}: not UTF-8 text")]
+    NotText {
+        /// 1-based line number.
+        line: u64,
+    },
+    /// The line is longer than the importer accepts (a binary file or a missing newline).
+    #[error("line {line}: longer than {max} bytes")]
+    LineTooLong {
+        /// 1-based line number.
+        line: u64,
+        /// The limit in bytes.
+        max: usize,
+    },
+    /// A field could not be read as what it must be.
+    #[error("line {line}: {record} field {field} ({name}): expected {expected}, found '{found}'")]
+    BadField {
+        /// 1-based line number.
+        line: u64,
+        /// Record tag, e.g. `FLASER`.
+        record: String,
+        /// 1-based field number, the tag being field 1.
+        field: usize,
+        /// What the field means, e.g. `x` or `range`.
+        name: &'static str,
+        /// What it should have been, e.g. `a finite number`.
+        expected: &'static str,
+        /// The text found (cut to 40 characters).
+        found: String,
+    },
+    /// The line has the wrong number of fields for its record type.
+    #[error(
+        "line {line}: {record}{}: expected {expected} fields, the line has {found}",
+        context.as_deref().map(|c| format!(" {c}")).unwrap_or_default()
+    )]
+    FieldCount {
+        /// 1-based line number.
+        line: u64,
+        /// Record tag.
+        record: String,
+        /// Why that many fields, for records whose length depends on a count in them,
+        /// e.g. `declares 180 readings`.
+        context: Option<String>,
+        /// Number of fields the record needs, the tag included.
+        expected: usize,
+        /// Number of fields the line has.
+        found: usize,
+    },
+}

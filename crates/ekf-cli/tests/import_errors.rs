@@ -1,0 +1,244 @@
+//! Bad input: every error names the line and the field, ends the iteration after the
+//! good records before it, and no input (random bytes, mutated lines) makes a panic.
+
+mod import_common;
+
+use ekf_cli::import::{read_carmen, read_mrpt, CarmenOptions, ImportError, ImportRecord};
+use proptest::prelude::*;
+
+/// All records before the first error and the error's message; asserts that the
+/// iteration ends right after the error.
+fn carmen_until_error(text: &[u8]) -> (Vec<ImportRecord>, String) {
+    let mut reader = read_carmen(text, CarmenOptions::default());
+    let mut ok = Vec::new();
+    for item in reader.by_ref() {
+        match item {
+            Ok(r) => ok.push(r),
+            Err(e) => {
+                assert!(reader.next().is_none(), "iteration goes on after an error");
+                return (ok, e.to_string());
+            }
+        }
+    }
+    panic!("no error for {:?}", String::from_utf8_lossy(text));
+}
+
+fn mrpt_error(text: &str) -> String {
+    read_mrpt(text.as_bytes())
+        .find_map(Result::err)
+        .map(|e| e.to_string())
+        .expect("an error")
+}
+
+const GOOD_ODOM: &str = "ODOM 1 2 0.5 0 0 0 7.25 host 7.25\n";
+
+#[test]
+fn truncated_line_names_the_record_and_field_count() {
+    let text = format!("{GOOD_ODOM}# comment\nODOM 1 2\n");
+    let (ok, e) = carmen_until_error(text.as_bytes());
+    assert_eq!(ok.len(), 1, "the good record before the error is yielded");
+    assert_eq!(e, "line 3: ODOM: expected 10 fields, the line has 3");
+}
+
+#[test]
+fn non_numeric_field_is_named() {
+    let text = "FLASER 4 1 2 3 4 abc 0 0 0 0 0 5.0 host 5.0\n";
+    let (_, e) = carmen_until_error(text.as_bytes());
+    assert_eq!(
+        e,
+        "line 1: FLASER field 7 (x): expected a finite number, found 'abc'"
+    );
+}
+
+#[test]
+fn wrong_reading_count_is_reported() {
+    let ranges = vec!["1.0"; 139].join(" ");
+    let text = format!("FLASER 180 {ranges} 0 0 0 0 0 0 5.0 host 5.0\n");
+    let (_, e) = carmen_until_error(text.as_bytes());
+    assert_eq!(
+        e,
+        "line 1: FLASER declares 180 readings: expected 191 fields, the line has 150"
+    );
+}
+
+#[test]
+fn nan_and_infinity_are_rejected() {
+    let (_, e) = carmen_until_error(b"FLASER 2 1.0 NaN 0 0 0 0 0 0 5.0 host 5.0\n");
+    assert_eq!(
+        e,
+        "line 1: FLASER field 4 (range): expected a finite number, found 'NaN'"
+    );
+    let (_, e) = carmen_until_error(b"ODOM 1 inf 0 0 0 0 1 h 1\n");
+    assert_eq!(
+        e,
+        "line 1: ODOM field 3 (y): expected a finite number, found 'inf'"
+    );
+}
+
+#[test]
+fn bad_timestamp_and_count_are_named() {
+    let (_, e) = carmen_until_error(b"ODOM 1 2 3 0 0 0 -4 h 1\n");
+    assert_eq!(
+        e,
+        "line 1: ODOM field 8 (timestamp): expected a non-negative time in seconds, found '-4'"
+    );
+    let (_, e) = carmen_until_error(b"FLASER -3 0 0 0\n");
+    assert_eq!(
+        e,
+        "line 1: FLASER field 2 (num_readings): expected a non-negative integer, found '-3'"
+    );
+}
+
+#[test]
+fn robotlaser1_remission_count_is_checked() {
+    let text = "ROBOTLASER1 0 -1.5 3.0 0.75 30.0 0.01 0 2 1 2 5 0.5 0 0 0 0 0 0 0 0 0 0 0 1 h 1\n";
+    let (_, e) = carmen_until_error(text.as_bytes());
+    assert_eq!(
+        e,
+        "line 1: ROBOTLASER1 declares 2 readings and 5 remissions: expected 31 fields, the line has 27"
+    );
+}
+
+#[test]
+fn not_text_is_an_error() {
+    let (_, e) = carmen_until_error(b"ODOM 1 2 3 0 0 0 1 h 1\n\xff\xfe\n");
+    assert_eq!(e, "line 2: not UTF-8 text");
+}
+
+#[test]
+fn mrpt_errors_name_line_and_field() {
+    let ok = "RAWSCAN 1.5 3 3.14 80 0.78 0 0 1 2 3 label= rightToLeft=1\n";
+    assert_eq!(
+        mrpt_error(&format!("{ok}RAWSCAN 1.5 3 3.14 80 0.78 0 0 1 2\n")),
+        "line 2: RAWSCAN declares 3 readings: expected 11 fields, the line has 10"
+    );
+    assert_eq!(
+        mrpt_error("RAWSCAN 1.5 3 3.14 80 0.78 0 0 1 nan 3\n"),
+        "line 1: RAWSCAN field 10 (range): expected a finite number, found 'nan'"
+    );
+    assert_eq!(
+        mrpt_error("RAWSCAN 1.5 3 3.14 80 0.78 0 0 1 2 3 4\n"),
+        "line 1: RAWSCAN field 12 (trailing): expected key=value after the readings, found '4'"
+    );
+    assert_eq!(
+        mrpt_error("RAWSCAN 1.5 3 3.14 80 0.78 0 0 1 2 3 rightToLeft=yes\n"),
+        "line 1: RAWSCAN field 12 (rightToLeft): expected rightToLeft=0 or rightToLeft=1, found 'rightToLeft=yes'"
+    );
+    assert_eq!(
+        mrpt_error("ODOM 0 0 x 0 0 0 1.0\n"),
+        "line 1: ODOM field 4 (theta): expected a finite number, found 'x'"
+    );
+}
+
+#[test]
+fn overlong_line_is_an_error_not_a_memory_hog() {
+    let text = vec![b'1'; ekf_cli::import::MAX_LINE_BYTES + 10];
+    let err = read_mrpt(text.as_slice())
+        .find_map(Result::err)
+        .expect("an error");
+    assert!(
+        matches!(err, ImportError::LineTooLong { line: 1, .. }),
+        "{err}"
+    );
+}
+
+/// Drains both importers over `bytes`; the test is that this returns.
+fn drain(bytes: &[u8]) {
+    let mut carmen = read_carmen(bytes, CarmenOptions::default());
+    carmen.by_ref().for_each(drop);
+    let _ = carmen.stats().span_ns();
+    read_mrpt(bytes).for_each(drop);
+}
+
+const CARMEN: &str = include_str!("fixtures/carmen_corrected.log");
+const MRPT: &str = include_str!("fixtures/mrpt_excerpt.txt");
+
+/// One way to damage a line of a valid file.
+#[derive(Debug, Clone)]
+enum Mutation {
+    DropField(usize),
+    ReplaceField(usize, String),
+    InsertField(usize, String),
+    Truncate(usize),
+    Duplicate,
+}
+
+fn mutation() -> impl Strategy<Value = Mutation> {
+    let word = prop_oneof![
+        Just("nan".to_owned()),
+        Just("-1".to_owned()),
+        Just("0".to_owned()),
+        Just("1e308".to_owned()),
+        Just("99999999999999999999".to_owned()),
+        Just("rightToLeft=2".to_owned()),
+        "[ -~]{0,8}",
+    ];
+    prop_oneof![
+        (0..400usize).prop_map(Mutation::DropField),
+        (0..400usize, word.clone()).prop_map(|(i, w)| Mutation::ReplaceField(i, w)),
+        (0..400usize, word).prop_map(|(i, w)| Mutation::InsertField(i, w)),
+        (0..4000usize).prop_map(Mutation::Truncate),
+        Just(Mutation::Duplicate),
+    ]
+}
+
+fn mutate(text: &str, line: usize, m: &Mutation) -> String {
+    let mut lines: Vec<String> = text.lines().map(str::to_owned).collect();
+    let i = line % lines.len();
+    let mut words: Vec<String> = lines[i].split_whitespace().map(str::to_owned).collect();
+    match m {
+        Mutation::DropField(f) if !words.is_empty() => {
+            let f = f % words.len();
+            words.remove(f);
+        }
+        Mutation::ReplaceField(f, w) if !words.is_empty() => {
+            let f = f % words.len();
+            words[f].clone_from(w);
+        }
+        Mutation::InsertField(f, w) => words.insert(f % (words.len() + 1), w.clone()),
+        Mutation::Truncate(n) => {
+            let cut = lines[i]
+                .char_indices()
+                .nth(*n)
+                .map_or(lines[i].len(), |(b, _)| b);
+            words = vec![lines[i][..cut].to_owned()];
+        }
+        Mutation::Duplicate => lines.insert(i, lines[i].clone()),
+        _ => {}
+    }
+    if !matches!(m, Mutation::Duplicate) {
+        lines[i] = words.join(" ");
+    }
+    lines.join("\n")
+}
+
+proptest! {
+    #[test]
+    fn random_bytes_never_panic(bytes in proptest::collection::vec(any::<u8>(), 0..2048)) {
+        drain(&bytes);
+    }
+
+    #[test]
+    fn random_text_lines_never_panic(lines in proptest::collection::vec(
+        prop_oneof![
+            "(ODOM|FLASER|ROBOTLASER1|RAWSCAN|PARAM|NEFF|#)( [-0-9.e]{1,6}){0,40}",
+            "[ -~]{0,60}",
+        ],
+        0..20,
+    )) {
+        drain(lines.join("\n").as_bytes());
+    }
+
+    #[test]
+    fn mutated_valid_files_never_panic(
+        mutations in proptest::collection::vec((0..20usize, mutation()), 1..4)
+    ) {
+        for original in [CARMEN, MRPT] {
+            let mut text = original.to_owned();
+            for (line, m) in &mutations {
+                text = mutate(&text, *line, m);
+            }
+            drain(text.as_bytes());
+        }
+    }
+}
