@@ -2,6 +2,7 @@
 //! trajectory evaluation and plots. `main.rs` only parses arguments and calls in here;
 //! nothing in this library prints or exits.
 
+pub mod commands;
 pub mod eval;
 pub mod import;
 pub mod plot;

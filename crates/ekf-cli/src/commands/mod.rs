@@ -1,0 +1,4 @@
+//! One module per `ekf` subcommand: each takes parsed arguments and returns a report;
+//! `main.rs` prints it.
+
+pub mod evaluate;

@@ -1,0 +1,67 @@
+//! `ekf evaluate` end to end: the binary's JSON equals evo's numbers for the golden pair,
+//! and a missing file is a clear error with a non-zero exit.
+
+use std::process::Command;
+
+fn golden(name: &str) -> String {
+    format!("{}/tests/golden/{name}", env!("CARGO_MANIFEST_DIR"))
+}
+
+fn evo_case(case: &str, metric: &str) -> f64 {
+    let text = std::fs::read_to_string(golden("evo_expected.json")).unwrap();
+    let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    v["cases"][case]["translation_m"][metric].as_f64().unwrap()
+}
+
+fn run_json(extra: &[&str]) -> serde_json::Value {
+    let out = Command::new(env!("CARGO_BIN_EXE_ekf"))
+        .args([
+            "evaluate",
+            &golden("evo_est.txt"),
+            "--truth",
+            &golden("evo_ref.txt"),
+            "--json",
+        ])
+        .args(extra)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "stderr: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
+#[test]
+fn json_matches_evo() {
+    let v = run_json(&[]);
+    let got = v["ape"]["translation_m"]["rmse"].as_f64().unwrap();
+    assert!(
+        (got - evo_case("ape_none", "rmse")).abs() < 1e-9,
+        "ATE {got}"
+    );
+    assert_eq!(v["ape"]["matched_poses"], 117);
+    let aligned = run_json(&["--align"]);
+    let got = aligned["ape"]["translation_m"]["rmse"].as_f64().unwrap();
+    assert!(
+        (got - evo_case("ape_align", "rmse")).abs() < 1e-9,
+        "aligned ATE {got}"
+    );
+}
+
+#[test]
+fn missing_file_names_it_and_fails() {
+    let out = Command::new(env!("CARGO_BIN_EXE_ekf"))
+        .args([
+            "evaluate",
+            "no-such-estimate.txt",
+            "--truth",
+            &golden("evo_ref.txt"),
+        ])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("no-such-estimate.txt"), "stderr: {err}");
+}
