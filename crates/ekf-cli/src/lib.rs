@@ -1,3 +1,6 @@
 //! The library behind the `ekf` command: ROS 2 MCAP input and output, log importers,
 //! trajectory evaluation and plots. `main.rs` only parses arguments and calls in here;
 //! nothing in this library prints or exits.
+
+pub mod mcap_io;
+pub mod ros2;

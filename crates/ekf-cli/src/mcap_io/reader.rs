@@ -1,0 +1,228 @@
+//! Opening a ROS 2 bag: its topics with types and counts, and a stream of its messages
+//! read incrementally from the file, so memory does not grow with the file.
+
+use super::error::ReadError;
+use super::message::{BagMessage, TopicInfo};
+use super::source::{self, IndexedSource, LinearSource, Raw, SourceError};
+use mcap::Summary;
+use std::collections::BTreeMap;
+use std::fs::File;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// The order [`Messages`] delivers messages in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MessageOrder {
+    /// Non-decreasing log time, ties in file order. Used when the file has a summary with
+    /// chunk indexes (every properly finished bag).
+    LogTime,
+    /// The order of the records in the file, with no reordering. Used for files without a
+    /// usable summary (truncated, unchunked or with a damaged summary). `ros2 bag record`
+    /// writes messages as they arrive, so its files are in log-time order this way too;
+    /// files written in stamp order by other tools may not be.
+    File,
+}
+
+/// An MCAP ROS 2 bag opened for reading.
+#[derive(Debug)]
+pub struct BagReader {
+    path: Arc<Path>,
+    file_len: u64,
+    /// Present when the file has a summary with chunk indexes.
+    summary: Option<Summary>,
+    topics: Vec<TopicInfo>,
+}
+
+impl BagReader {
+    /// Opens `path`, reads its summary (or, without one, counts its messages by reading the
+    /// file once) and lists its topics. A damaged file still opens; the damage is reported
+    /// by [`Messages`] when it is reached.
+    pub fn open(path: impl AsRef<Path>) -> Result<Self, ReadError> {
+        let path: Arc<Path> = Arc::from(path.as_ref());
+        let open_error = |source| ReadError::Open {
+            path: path.to_path_buf(),
+            source,
+        };
+        let mut file = File::open(&path).map_err(open_error)?;
+        let file_len = file.metadata().map_err(open_error)?.len();
+        let summary =
+            source::read_summary(&mut file, file_len).filter(|s| !s.chunk_indexes.is_empty());
+        let mut bag = Self {
+            path,
+            file_len,
+            summary,
+            topics: Vec::new(),
+        };
+        bag.topics = match bag.summary.as_ref().and_then(summary_topics) {
+            Some(topics) => topics,
+            None => bag.count_topics()?,
+        };
+        Ok(bag)
+    }
+
+    /// The file this bag was opened from.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Topics sorted by name, each with its type and message count.
+    pub fn topics(&self) -> &[TopicInfo] {
+        &self.topics
+    }
+
+    /// The order [`Self::messages`] delivers messages in.
+    pub fn order(&self) -> MessageOrder {
+        if self.summary.is_some() {
+            MessageOrder::LogTime
+        } else {
+            MessageOrder::File
+        }
+    }
+
+    /// A new stream over all messages, in [`Self::order`], reading the file incrementally.
+    pub fn messages(&self) -> Result<Messages, ReadError> {
+        let file = File::open(&self.path).map_err(|source| ReadError::Open {
+            path: self.path.to_path_buf(),
+            source,
+        })?;
+        let source = match &self.summary {
+            Some(summary) => {
+                let channels = source::summary_channels(summary, &self.path);
+                let indexed = IndexedSource::new(file, self.file_len, summary, channels)
+                    .map_err(|e| to_read_error(&self.path, 0, e))?;
+                Source::Indexed(Box::new(indexed))
+            }
+            None => Source::Linear(Box::new(LinearSource::new(file, Arc::clone(&self.path)))),
+        };
+        Ok(Messages {
+            path: self.path.to_path_buf(),
+            source,
+            delivered: 0,
+            done: false,
+        })
+    }
+
+    /// Counts messages per topic by streaming the file up to its end or its damage.
+    fn count_topics(&self) -> Result<Vec<TopicInfo>, ReadError> {
+        let mut counts: BTreeMap<(String, String), u64> = BTreeMap::new();
+        for message in self.messages()? {
+            let Ok(message) = message else { break };
+            let key = (
+                message.channel.topic.clone(),
+                message.channel.type_name.clone(),
+            );
+            *counts.entry(key).or_default() += 1;
+        }
+        Ok(into_topics(counts))
+    }
+}
+
+/// Topics and counts from the summary; `None` if it has no statistics.
+fn summary_topics(summary: &Summary) -> Option<Vec<TopicInfo>> {
+    let stats = summary.stats.as_ref()?;
+    let mut counts: BTreeMap<(String, String), u64> = BTreeMap::new();
+    for (id, channel) in &summary.channels {
+        let type_name = channel
+            .schema
+            .as_ref()
+            .map(|s| s.name.clone())
+            .unwrap_or_default();
+        let count = stats.channel_message_counts.get(id).copied().unwrap_or(0);
+        *counts
+            .entry((channel.topic.clone(), type_name))
+            .or_default() += count;
+    }
+    Some(into_topics(counts))
+}
+
+/// Turns `(topic, type) → count` into a sorted topic list.
+fn into_topics(counts: BTreeMap<(String, String), u64>) -> Vec<TopicInfo> {
+    counts
+        .into_iter()
+        .map(|((topic, type_name), message_count)| TopicInfo {
+            topic,
+            type_name,
+            message_count,
+        })
+        .collect()
+}
+
+/// Adds the file and the number of delivered messages to a source's error.
+fn to_read_error(path: &Path, delivered: u64, e: SourceError) -> ReadError {
+    let path = path.to_path_buf();
+    match e {
+        SourceError::Mcap { offset, source } => ReadError::Corrupt {
+            path,
+            offset,
+            messages: delivered,
+            source,
+        },
+        SourceError::Io { offset, source } => ReadError::Io {
+            path,
+            offset,
+            source,
+        },
+        SourceError::UnknownChannel(channel_id) => ReadError::UnknownChannel {
+            path,
+            index: delivered,
+            channel_id,
+        },
+    }
+}
+
+/// Where [`Messages`] gets its messages.
+enum Source {
+    /// Through the chunk indexes.
+    Indexed(Box<IndexedSource>),
+    /// Front to back.
+    Linear(Box<LinearSource>),
+}
+
+/// The messages of a bag. Yields every message up to the end or the first damage; after an
+/// error it yields nothing more.
+pub struct Messages {
+    path: PathBuf,
+    source: Source,
+    delivered: u64,
+    done: bool,
+}
+
+impl Iterator for Messages {
+    type Item = Result<BagMessage, ReadError>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        if self.done {
+            return None;
+        }
+        let next = match &mut self.source {
+            Source::Indexed(s) => s.next(),
+            Source::Linear(s) => s.next(),
+        };
+        match next {
+            None => {
+                self.done = true;
+                None
+            }
+            Some(Err(e)) => {
+                self.done = true;
+                Some(Err(to_read_error(&self.path, self.delivered, e)))
+            }
+            Some(Ok(Raw {
+                channel,
+                log_time,
+                publish_time,
+                data,
+            })) => {
+                let index = self.delivered;
+                self.delivered += 1;
+                Some(Ok(BagMessage {
+                    channel,
+                    index,
+                    log_time,
+                    publish_time,
+                    data,
+                }))
+            }
+        }
+    }
+}
