@@ -98,7 +98,10 @@ fn pose_stamped_aligns_doubles_relative_to_payload_start() {
     ];
     let pose = PoseStamped {
         header: Header {
-            stamp: Time { sec: 10, nanosec: 0 },
+            stamp: Time {
+                sec: 10,
+                nanosec: 0,
+            },
             frame_id: "odom".into(),
         },
         pose: Pose {
@@ -174,7 +177,10 @@ fn any_message_decodes_by_full_or_short_type_name() {
         assert_eq!(any.encode().unwrap(), bytes);
     }
     let err = AnyMessage::decode("sensor_msgs/msg/PointCloud2", &bytes).unwrap_err();
-    assert!(err.to_string().contains("sensor_msgs/msg/PointCloud2"), "{err}");
+    assert!(
+        err.to_string().contains("sensor_msgs/msg/PointCloud2"),
+        "{err}"
+    );
 }
 
 #[test]
@@ -188,7 +194,9 @@ fn bad_payloads_give_errors_naming_the_problem() {
         Err(CdrError::Encapsulation { header: [0, 7] })
     ));
     // A string that claims 4 GiB must fail fast, not allocate.
-    let bytes = [0, 1, 0, 0, 1, 0, 0, 0, 0, 0, 0, 0, 0xFF, 0xFF, 0xFF, 0xFF, b'x'];
+    let bytes = [
+        0, 1, 0, 0, 1, 0, 0, 0, 0, 0, 0, 0, 0xFF, 0xFF, 0xFF, 0xFF, b'x',
+    ];
     let err = Header::decode(&bytes).unwrap_err();
     assert!(err.to_string().contains("std_msgs/msg/Header"), "{err}");
 }
@@ -204,7 +212,14 @@ fn time_converts_to_and_from_nanoseconds() {
         }
     );
     assert_eq!(t.to_nanos(), Some(1_500_000_000_250));
-    assert_eq!(Time { sec: -1, nanosec: 0 }.to_nanos(), None);
+    assert_eq!(
+        Time {
+            sec: -1,
+            nanosec: 0
+        }
+        .to_nanos(),
+        None
+    );
     assert_eq!(Time::from_nanos(u64::MAX), None);
 }
 

@@ -3,7 +3,7 @@
 
 use super::error::WriteError;
 use super::{MESSAGE_ENCODING, PROFILE, SCHEMA_ENCODING};
-use crate::ros2::{RosMessage, Stamped};
+use crate::ros2::{AnyMessage, CdrError, MsgDef, RosMessage, Stamped};
 use mcap::records::MessageHeader;
 use std::collections::{BTreeMap, HashMap};
 use std::fs::File;
@@ -73,12 +73,34 @@ impl BagWriter {
         time_ns: u64,
         message: &M,
     ) -> Result<(), WriteError> {
-        let data = message.encode().map_err(|source| WriteError::Encode {
+        self.write_encoded(topic, M::DEF, time_ns, message.encode())
+    }
+
+    /// Writes a message of any supported type on `topic` at `time_ns` (log and publish
+    /// time), e.g. one read from another bag.
+    pub fn write_any(
+        &mut self,
+        topic: &str,
+        time_ns: u64,
+        message: &AnyMessage,
+    ) -> Result<(), WriteError> {
+        self.write_encoded(topic, message.def(), time_ns, message.encode())
+    }
+
+    /// Writes an encoded message of type `def`, registering its channel if new.
+    fn write_encoded(
+        &mut self,
+        topic: &str,
+        def: &'static MsgDef,
+        time_ns: u64,
+        data: Result<Vec<u8>, CdrError>,
+    ) -> Result<(), WriteError> {
+        let data = data.map_err(|source| WriteError::Encode {
             path: self.path.clone(),
             topic: topic.to_owned(),
             source,
         })?;
-        let channel_id = self.channel::<M>(topic)?;
+        let channel_id = self.channel(topic, def)?;
         let sequence = self.sequences.entry(channel_id).or_insert(0);
         *sequence = sequence.wrapping_add(1);
         let header = MessageHeader {
@@ -99,16 +121,16 @@ impl BagWriter {
         self.close()
     }
 
-    /// The channel for (`topic`, `M`), registering it and its schema on first use.
-    fn channel<M: RosMessage>(&mut self, topic: &str) -> Result<u16, WriteError> {
-        let key = (topic.to_owned(), M::DEF.name);
+    /// The channel for (`topic`, `def`), registering it and its schema on first use.
+    fn channel(&mut self, topic: &str, def: &'static MsgDef) -> Result<u16, WriteError> {
+        let key = (topic.to_owned(), def.name);
         if let Some(&id) = self.channels.get(&key) {
             return Ok(id);
         }
         let path = &self.path;
         let writer = self.inner.as_mut().ok_or_else(|| finished(path, topic))?;
         let schema_id = writer
-            .add_schema(M::DEF.name, SCHEMA_ENCODING, M::schema_text().as_bytes())
+            .add_schema(def.name, SCHEMA_ENCODING, def.schema_text().as_bytes())
             .map_err(|source| mcap_error(path, topic, source))?;
         let metadata = BTreeMap::from([(QOS_KEY.to_owned(), String::new())]);
         let id = writer

@@ -56,8 +56,13 @@ macro_rules! any_message {
 
             /// The full type name of the held message.
             pub fn type_name(&self) -> &'static str {
+                self.def().name
+            }
+
+            /// The definition of the held message's type.
+            pub fn def(&self) -> &'static MsgDef {
                 match self {
-                    $(Self::$variant(_) => <$ty as RosMessage>::DEF.name,)*
+                    $(Self::$variant(_) => <$ty as RosMessage>::DEF,)*
                 }
             }
 
