@@ -27,7 +27,18 @@ fn truncated_files_deliver_everything_before_the_cut_then_say_where() {
     let len = bytes.len();
 
     let mut previous = 0;
-    for cut in [0, 5, 9, 200, len / 4, len / 2, 3 * len / 4, len - 200, len - 30, len - 1] {
+    for cut in [
+        0,
+        5,
+        9,
+        200,
+        len / 4,
+        len / 2,
+        3 * len / 4,
+        len - 200,
+        len - 30,
+        len - 1,
+    ] {
         let path = dir.path().join(format!("cut_{cut}.mcap"));
         std::fs::write(&path, &bytes[..cut]).unwrap();
         let bag = BagReader::open(&path).unwrap();
@@ -36,18 +47,31 @@ fn truncated_files_deliver_everything_before_the_cut_then_say_where() {
         let (delivered, err) = read_all_ok(&path);
         let err = err.unwrap_or_else(|| panic!("cut at {cut}: no error reported"));
         assert_eq!(delivered[..], original[..delivered.len()], "cut at {cut}");
-        assert!(delivered.len() >= previous, "cut at {cut}: fewer than a shorter cut");
+        assert!(
+            delivered.len() >= previous,
+            "cut at {cut}: fewer than a shorter cut"
+        );
         previous = delivered.len();
         let counted: u64 = bag.topics().iter().map(|t| t.message_count).sum();
-        assert_eq!(counted, delivered.len() as u64, "cut at {cut}: topic counts");
+        assert_eq!(
+            counted,
+            delivered.len() as u64,
+            "cut at {cut}: topic counts"
+        );
 
         assert!(corrupt_offset(&err) <= cut as u64, "cut at {cut}: {err}");
         let text = err.to_string();
         assert!(text.contains(&format!("cut_{cut}.mcap")), "{text}");
         assert!(text.contains("byte"), "{text}");
-        assert!(text.contains(&format!("after {} messages", delivered.len())), "{text}");
+        assert!(
+            text.contains(&format!("after {} messages", delivered.len())),
+            "{text}"
+        );
     }
-    assert!(previous as u64 == SCANS, "a cut in the summary loses no message");
+    assert!(
+        previous as u64 == SCANS,
+        "a cut in the summary loses no message"
+    );
 }
 
 /// Chunk indexes of the file at `path`.
@@ -62,13 +86,21 @@ fn a_flipped_byte_in_a_chunk_stops_at_that_chunk() {
     let full = dir.path().join("full.mcap");
     let original = write_multi_chunk_bag(&full, SCANS);
     let chunks = chunk_indexes(&full);
-    assert!(chunks.len() >= 4, "need several chunks, got {}", chunks.len());
+    assert!(
+        chunks.len() >= 4,
+        "need several chunks, got {}",
+        chunks.len()
+    );
     let bytes = std::fs::read(&full).unwrap();
 
     for k in [0, 2, chunks.len() - 1] {
         let chunk = &chunks[k];
         let data = chunk.compressed_data_offset().unwrap();
-        for at in [data, data + chunk.compressed_size / 2, data + chunk.compressed_size - 1] {
+        for at in [
+            data,
+            data + chunk.compressed_size / 2,
+            data + chunk.compressed_size - 1,
+        ] {
             let mut damaged = bytes.clone();
             damaged[at as usize] ^= 0x5A;
             let path = dir.path().join(format!("flip_{at}.mcap"));
@@ -115,6 +147,27 @@ fn a_flipped_byte_in_a_truncated_file_stops_at_that_chunk() {
         "{offset} outside chunk {}..{chunk_end}: {err}",
         chunk.chunk_start_offset
     );
+}
+
+#[test]
+fn a_flipped_byte_in_the_summary_falls_back_to_reading_front_to_back() {
+    let dir = tempfile::tempdir().unwrap();
+    let full = dir.path().join("full.mcap");
+    let original = write_multi_chunk_bag(&full, SCANS);
+    let mut bytes = std::fs::read(&full).unwrap();
+    let footer = mcap::read::footer(&bytes).unwrap();
+    let at = (footer.summary_start as usize + bytes.len()) / 2;
+    bytes[at] ^= 0x01;
+    let path = dir.path().join("bad_summary.mcap");
+    std::fs::write(&path, &bytes).unwrap();
+
+    let bag = BagReader::open(&path).unwrap();
+    assert_eq!(bag.order(), MessageOrder::File, "damaged summary is not trusted");
+    assert_eq!(bag.topics()[0].message_count, SCANS);
+    let (delivered, err) = read_all_ok(&path);
+    assert_eq!(delivered, original);
+    let err = err.expect("summary damage reported after the messages");
+    assert!(corrupt_offset(&err) >= footer.summary_start, "{err}");
 }
 
 #[test]

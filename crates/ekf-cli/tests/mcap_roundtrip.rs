@@ -17,7 +17,11 @@ fn every_message_type_round_trips() {
     let path = dir.path().join("sample.mcap");
     write_sample_bag(&path);
     let expected = sample::messages();
-    assert_eq!(expected.len(), SUPPORTED.len(), "the sample covers every type");
+    assert_eq!(
+        expected.len(),
+        SUPPORTED.len(),
+        "the sample covers every type"
+    );
 
     let bag = BagReader::open(&path).unwrap();
     assert_eq!(bag.order(), MessageOrder::LogTime);
@@ -56,7 +60,12 @@ fn typed_decode_and_wrong_type_error() {
     let err = odom.decode_as::<LaserScan>().unwrap_err();
     assert!(matches!(err, MessageError::WrongType { .. }));
     let text = err.to_string();
-    for needle in ["sample.mcap", "/odom", "sensor_msgs/msg/LaserScan", "nav_msgs/msg/Odometry"] {
+    for needle in [
+        "sample.mcap",
+        "/odom",
+        "sensor_msgs/msg/LaserScan",
+        "nav_msgs/msg/Odometry",
+    ] {
         assert!(text.contains(needle), "`{needle}` missing from: {text}");
     }
 }
@@ -73,7 +82,12 @@ fn corrupt_payload_error_names_topic_and_message() {
     message.data.truncate(20); // cut inside the scan's float fields
     let err = message.decode().unwrap_err();
     let text = err.to_string();
-    for needle in ["bad.mcap", "/scan", "message 0", "sensor_msgs/msg/LaserScan"] {
+    for needle in [
+        "bad.mcap",
+        "/scan",
+        "message 0",
+        "sensor_msgs/msg/LaserScan",
+    ] {
         assert!(text.contains(needle), "`{needle}` missing from: {text}");
     }
 }
@@ -119,7 +133,9 @@ fn log_time_is_the_header_stamp_and_write_at_sets_it_for_headerless_messages() {
     let path = dir.path().join("stamps.mcap");
     let mut writer = BagWriter::create(&path).unwrap();
     writer.write("/scan", &scan(7_000_000_123, 3)).unwrap();
-    writer.write_at("/tf", 8_000_000_000, &TFMessage::default()).unwrap();
+    writer
+        .write_at("/tf", 8_000_000_000, &TFMessage::default())
+        .unwrap();
     writer.finish().unwrap();
     let times: Vec<(String, u64, u64)> = BagReader::open(&path)
         .unwrap()
@@ -144,9 +160,15 @@ fn negative_stamp_is_an_error() {
     let dir = tempfile::tempdir().unwrap();
     let mut writer = BagWriter::create(dir.path().join("neg.mcap")).unwrap();
     let mut s = scan(0, 1);
-    s.header.stamp = Time { sec: -5, nanosec: 0 };
+    s.header.stamp = Time {
+        sec: -5,
+        nanosec: 0,
+    };
     let err = writer.write("/scan", &s).unwrap_err();
-    assert!(matches!(err, WriteError::NegativeStamp { sec: -5, .. }), "{err}");
+    assert!(
+        matches!(err, WriteError::NegativeStamp { sec: -5, .. }),
+        "{err}"
+    );
 }
 
 #[test]
@@ -178,7 +200,11 @@ fn the_mcap_crate_reads_our_files() {
     write_sample_bag(&path);
     let bytes = std::fs::read(&path).unwrap();
 
-    let header = mcap::read::LinearReader::new(&bytes).unwrap().next().unwrap().unwrap();
+    let header = mcap::read::LinearReader::new(&bytes)
+        .unwrap()
+        .next()
+        .unwrap()
+        .unwrap();
     match header {
         mcap::records::Record::Header(h) => assert_eq!(h.profile, "ros2"),
         other => panic!("first record is {other:?}"),

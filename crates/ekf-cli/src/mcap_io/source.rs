@@ -44,8 +44,8 @@ pub(crate) enum SourceError {
     UnknownChannel(u16),
 }
 
-/// Reads the summary section via the footer; `None` if the file has none or it is damaged
-/// (the caller then reads the file front to back).
+/// Reads the summary section via the footer; `None` if the file has none or it is damaged,
+/// judged by parsing and by its CRC (the caller then reads the file front to back).
 pub(crate) fn read_summary(file: &mut File, file_len: u64) -> Option<Summary> {
     let options = SummaryReaderOptions::default()
         .with_file_size(file_len)
@@ -62,7 +62,44 @@ pub(crate) fn read_summary(file: &mut File, file_len: u64) -> Option<Summary> {
             }
         }
     }
-    reader.finish()
+    let summary = reader.finish()?;
+    summary_crc_matches(file, file_len).then_some(summary)
+}
+
+/// Whether the summary section's CRC in the footer matches its bytes (true if the writer
+/// left it 0). The CRC covers the summary section and the footer up to the CRC field.
+fn summary_crc_matches(file: &mut File, file_len: u64) -> bool {
+    summary_crc_check(file, file_len).unwrap_or(false)
+}
+
+/// [`summary_crc_matches`], with read errors.
+fn summary_crc_check(file: &mut File, file_len: u64) -> io::Result<bool> {
+    const MAGIC_LEN: u64 = 8;
+    // Footer body: summary_start (u64), summary_offset_start (u64), summary_crc (u32).
+    let mut footer = [0u8; 20];
+    file.seek(SeekFrom::Start(file_len.saturating_sub(MAGIC_LEN + 20)))?;
+    file.read_exact(&mut footer)?;
+    let [s0, s1, s2, s3, s4, s5, s6, s7, .., c0, c1, c2, c3] = footer;
+    let summary_start = u64::from_le_bytes([s0, s1, s2, s3, s4, s5, s6, s7]);
+    let saved = u32::from_le_bytes([c0, c1, c2, c3]);
+    if saved == 0 {
+        return Ok(true);
+    }
+    let end = file_len.saturating_sub(MAGIC_LEN + 4);
+    if summary_start > end {
+        return Ok(false);
+    }
+    file.seek(SeekFrom::Start(summary_start))?;
+    let mut hasher = crc32fast::Hasher::new();
+    let mut piece = vec![0u8; READ_PIECE];
+    let mut left = end - summary_start;
+    while left > 0 {
+        let n = left.min(READ_PIECE as u64) as usize;
+        file.read_exact(&mut piece[..n])?;
+        hasher.update(&piece[..n]);
+        left -= n as u64;
+    }
+    Ok(hasher.finalize() == saved)
 }
 
 /// Builds the channel table from `summary`, keeping channels without schema (type name "").
@@ -205,13 +242,35 @@ impl IndexedSource {
             Ok(_) => return Err(corrupt(McapError::BadIndex)),
             Err(e) => return Err(corrupt(e)),
         };
-        for record in mcap::read::ChunkReader::new(header, &data).map_err(corrupt)? {
-            record.map_err(corrupt)?;
+        if header.compressed_size != data.len() as u64 {
+            return Err(corrupt(McapError::BadIndex));
         }
+        check_chunk_crc(&self.buf).map_err(corrupt)?;
         self.reader
             .insert_chunk_record_data(data_offset, &data)
             .map_err(corrupt)
     }
+}
+
+/// Decompresses the chunk record `record` (opcode and length included) and checks its CRC,
+/// with the same size limit as the readers.
+fn check_chunk_crc(record: &[u8]) -> Result<(), McapError> {
+    let options = LinearReaderOptions::default()
+        .with_skip_start_magic(true)
+        .with_skip_end_magic(true)
+        .with_prevalidate_chunk_crcs(true)
+        .with_record_length_limit(MAX_RECORD_BYTES);
+    let mut reader = LinearReader::new_with_options(options);
+    let mut rest = record;
+    while let Some(event) = reader.next_event() {
+        if let LinearReadEvent::ReadRequest(n) = event? {
+            let (piece, tail) = rest.split_at(n.min(rest.len()));
+            reader.insert(piece.len()).copy_from_slice(piece);
+            reader.notify_read(piece.len());
+            rest = tail;
+        }
+    }
+    Ok(())
 }
 
 /// Messages in file order from any MCAP, including a truncated one: every message before
@@ -234,6 +293,7 @@ impl LinearSource {
         let options = LinearReaderOptions::default()
             .with_prevalidate_chunk_crcs(true)
             .with_validate_data_section_crc(true)
+            .with_validate_summary_section_crc(true)
             .with_record_length_limit(MAX_RECORD_BYTES);
         Self {
             file,

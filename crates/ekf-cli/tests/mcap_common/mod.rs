@@ -16,7 +16,9 @@ use std::path::Path;
 pub fn write_sample_bag(path: &Path) {
     let mut writer = BagWriter::create(path).unwrap();
     for (i, (topic, message)) in sample::messages().iter().enumerate() {
-        writer.write_any(topic, sample::log_time(i), message).unwrap();
+        writer
+            .write_any(topic, sample::log_time(i), message)
+            .unwrap();
     }
     writer.finish().unwrap();
 }
@@ -30,7 +32,9 @@ pub fn scan(t_ns: u64, beams: usize) -> LaserScan {
         },
         angle_increment: 0.01,
         range_max: 30.0,
-        ranges: (0..beams).map(|k| (t_ns % 1000) as f32 + k as f32 * 0.5).collect(),
+        ranges: (0..beams)
+            .map(|k| (t_ns % 1000) as f32 + k as f32 * 0.5)
+            .collect(),
         ..LaserScan::default()
     }
 }
@@ -40,7 +44,9 @@ pub fn scan(t_ns: u64, beams: usize) -> LaserScan {
 pub fn write_multi_chunk_bag(path: &Path, count: u64) -> Vec<(u64, Vec<u8>)> {
     let mut writer = BagWriter::create(path).unwrap();
     for i in 0..count {
-        writer.write("/scan", &scan(1_000_000_000 + i * 100_000_000, 20_000)).unwrap();
+        writer
+            .write("/scan", &scan(1_000_000_000 + i * 100_000_000, 20_000))
+            .unwrap();
     }
     writer.finish().unwrap();
     read_all_ok(path).0
