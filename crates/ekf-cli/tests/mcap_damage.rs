@@ -162,7 +162,11 @@ fn a_flipped_byte_in_the_summary_falls_back_to_reading_front_to_back() {
     std::fs::write(&path, &bytes).unwrap();
 
     let bag = BagReader::open(&path).unwrap();
-    assert_eq!(bag.order(), MessageOrder::File, "damaged summary is not trusted");
+    assert_eq!(
+        bag.order(),
+        MessageOrder::File,
+        "damaged summary is not trusted"
+    );
     assert_eq!(bag.topics()[0].message_count, SCANS);
     let (delivered, err) = read_all_ok(&path);
     assert_eq!(delivered, original);

@@ -21,11 +21,9 @@ fn decode_all(bytes: &[u8]) {
 }
 
 fn header() -> impl Strategy<Value = Header> {
-    (any::<i32>(), 0u32..1_000_000_000, "[^\u{0}]{0,12}").prop_map(|(sec, nanosec, frame)| {
-        Header {
-            stamp: Time { sec, nanosec },
-            frame_id: frame,
-        }
+    (any::<i32>(), 0u32..1_000_000_000, "[^\u{0}]{0,12}").prop_map(|(sec, nanosec, frame)| Header {
+        stamp: Time { sec, nanosec },
+        frame_id: frame,
     })
 }
 
