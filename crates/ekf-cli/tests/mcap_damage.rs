@@ -3,8 +3,10 @@
 
 mod mcap_common;
 
-use ekf_cli::mcap_io::{BagReader, MessageOrder, ReadError};
-use mcap_common::{read_all_ok, write_multi_chunk_bag};
+use ekf_cli::mcap_io::{BagReader, BagWriter, MessageOrder, ReadError};
+use ekf_cli::ros2::sensor_msgs::LaserScan;
+use ekf_cli::ros2::RosMessage;
+use mcap_common::{read_all_ok, scan, write_multi_chunk_bag};
 use std::path::Path;
 
 /// Number of 80 kB scans: about six 1 MiB chunks.
@@ -42,7 +44,11 @@ fn truncated_files_deliver_everything_before_the_cut_then_say_where() {
         let path = dir.path().join(format!("cut_{cut}.mcap"));
         std::fs::write(&path, &bytes[..cut]).unwrap();
         let bag = BagReader::open(&path).unwrap();
-        assert_eq!(bag.order(), MessageOrder::File, "cut at {cut}: no summary");
+        assert_eq!(
+            bag.order(),
+            MessageOrder::LogTime,
+            "cut at {cut}: index rebuilt"
+        );
 
         let (delivered, err) = read_all_ok(&path);
         let err = err.unwrap_or_else(|| panic!("cut at {cut}: no error reported"));
@@ -150,7 +156,7 @@ fn a_flipped_byte_in_a_truncated_file_stops_at_that_chunk() {
 }
 
 #[test]
-fn a_flipped_byte_in_the_summary_falls_back_to_reading_front_to_back() {
+fn a_flipped_byte_in_the_summary_is_not_trusted_and_reported_after_the_messages() {
     let dir = tempfile::tempdir().unwrap();
     let full = dir.path().join("full.mcap");
     let original = write_multi_chunk_bag(&full, SCANS);
@@ -164,14 +170,88 @@ fn a_flipped_byte_in_the_summary_falls_back_to_reading_front_to_back() {
     let bag = BagReader::open(&path).unwrap();
     assert_eq!(
         bag.order(),
-        MessageOrder::File,
-        "damaged summary is not trusted"
+        MessageOrder::LogTime,
+        "damaged summary is rebuilt"
     );
     assert_eq!(bag.topics()[0].message_count, SCANS);
     let (delivered, err) = read_all_ok(&path);
     assert_eq!(delivered, original);
     let err = err.expect("summary damage reported after the messages");
     assert!(corrupt_offset(&err) >= footer.summary_start, "{err}");
+}
+
+#[test]
+fn a_truncated_bag_written_out_of_order_is_still_read_in_log_time_order() {
+    let dir = tempfile::tempdir().unwrap();
+    let full = dir.path().join("full.mcap");
+    let mut writer = BagWriter::create(&full).unwrap();
+    let times: Vec<u64> = (0..40).map(|i| 1_000_000_000 + i * 10_000_000).collect();
+    for (a, b) in times.iter().zip(times.iter().rev()) {
+        writer.write("/scan", &scan(*a, 20_000)).unwrap();
+        writer.write("/scan_rear", &scan(*b + 1, 20_000)).unwrap();
+    }
+    writer.finish().unwrap();
+    let bytes = std::fs::read(&full).unwrap();
+    let path = dir.path().join("cut.mcap");
+    std::fs::write(&path, &bytes[..bytes.len() * 2 / 3]).unwrap();
+
+    let bag = BagReader::open(&path).unwrap();
+    assert_eq!(bag.order(), MessageOrder::LogTime);
+    let (delivered, err) = read_all_ok(&path);
+    assert!(err.is_some());
+    assert!(delivered.len() > 10, "only {} delivered", delivered.len());
+    let log_times: Vec<u64> = delivered.iter().map(|(t, _)| *t).collect();
+    assert!(log_times.windows(2).all(|w| w[0] <= w[1]), "{log_times:?}");
+}
+
+#[test]
+fn unchunked_files_are_read_in_file_order() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("unchunked.mcap");
+    let mut writer = mcap::WriteOptions::new()
+        .profile("ros2")
+        .use_chunks(false)
+        .create(std::io::BufWriter::new(
+            std::fs::File::create(&path).unwrap(),
+        ))
+        .unwrap();
+    let schema = writer
+        .add_schema(
+            LaserScan::type_name(),
+            "ros2msg",
+            LaserScan::schema_text().as_bytes(),
+        )
+        .unwrap();
+    let channel = writer
+        .add_channel(schema, "/scan", "cdr", &Default::default())
+        .unwrap();
+    for (sequence, t) in [3_000u64, 1_000, 2_000].into_iter().enumerate() {
+        let header = mcap::records::MessageHeader {
+            channel_id: channel,
+            sequence: sequence as u32,
+            log_time: t,
+            publish_time: t,
+        };
+        let data = scan(t, 2).encode().unwrap();
+        writer.write_to_known_channel(&header, &data).unwrap();
+    }
+    writer.finish().unwrap();
+    drop(writer);
+
+    let bag = BagReader::open(&path).unwrap();
+    assert_eq!(bag.order(), MessageOrder::File);
+    assert_eq!(bag.topics()[0].message_count, 3);
+    let times: Vec<u64> = bag
+        .messages()
+        .unwrap()
+        .map(|m| {
+            let m = m.unwrap();
+            let s: LaserScan = m.decode_as().unwrap();
+            assert_eq!(s.header.stamp.to_nanos(), Some(m.log_time));
+            m.log_time
+        })
+        .collect();
+    assert_eq!(times, [3_000, 1_000, 2_000]);
 }
 
 #[test]

@@ -3,6 +3,7 @@
 
 use crate::ros2::DecodeError;
 use std::path::PathBuf;
+use std::sync::Arc;
 use thiserror::Error;
 
 /// Why a bag could not be opened or read further.
@@ -26,7 +27,7 @@ pub enum ReadError {
         offset: u64,
         /// The operating system's error.
         #[source]
-        source: std::io::Error,
+        source: Arc<std::io::Error>,
     },
     /// The file is truncated or corrupt; everything before `offset` was delivered.
     #[error(
@@ -43,7 +44,7 @@ pub enum ReadError {
         messages: u64,
         /// What the MCAP parser found.
         #[source]
-        source: mcap::McapError,
+        source: Arc<mcap::McapError>,
     },
     /// A message refers to a channel or schema the file never defined.
     #[error(

@@ -30,7 +30,7 @@ pub struct TopicInfo {
     /// Schema name, e.g. `nav_msgs/msg/Odometry`.
     pub type_name: String,
     /// Number of messages: from the summary's statistics when the file has them, otherwise
-    /// counted by reading the file (up to any damage).
+    /// counted by reading the file; in a damaged file, the messages before the damage.
     pub message_count: u64,
 }
 

@@ -28,6 +28,7 @@
 mod error;
 mod message;
 pub mod reader;
+mod recover;
 mod source;
 pub mod writer;
 

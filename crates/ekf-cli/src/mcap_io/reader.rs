@@ -3,6 +3,7 @@
 
 use super::error::ReadError;
 use super::message::{BagMessage, TopicInfo};
+use super::recover::recover;
 use super::source::{self, IndexedSource, LinearSource, Raw, SourceError};
 use mcap::Summary;
 use std::collections::BTreeMap;
@@ -13,13 +14,13 @@ use std::sync::Arc;
 /// The order [`Messages`] delivers messages in.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum MessageOrder {
-    /// Non-decreasing log time, ties in file order. Used when the file has a summary with
-    /// chunk indexes (every properly finished bag).
+    /// Non-decreasing log time, ties in file order. Used for every chunked file (all bags
+    /// `ros2 bag record` and [`super::BagWriter`] write): through the summary's chunk
+    /// indexes, or, when the summary is missing or damaged, through indexes rebuilt by
+    /// reading the file once at [`BagReader::open`].
     LogTime,
-    /// The order of the records in the file, with no reordering. Used for files without a
-    /// usable summary (truncated, unchunked or with a damaged summary). `ros2 bag record`
-    /// writes messages as they arrive, so its files are in log-time order this way too;
-    /// files written in stamp order by other tools may not be.
+    /// The order of the records in the file, with no reordering. Used only for files with
+    /// messages outside chunks, which no chunk index reaches.
     File,
 }
 
@@ -28,15 +29,18 @@ pub enum MessageOrder {
 pub struct BagReader {
     path: Arc<Path>,
     file_len: u64,
-    /// Present when the file has a summary with chunk indexes.
+    /// The file's summary, or one rebuilt by reading the file; `None` for unchunked files.
     summary: Option<Summary>,
+    /// Where rebuilding the summary stopped early; reported after the last message.
+    damage: Option<SourceError>,
     topics: Vec<TopicInfo>,
 }
 
 impl BagReader {
-    /// Opens `path`, reads its summary (or, without one, counts its messages by reading the
-    /// file once) and lists its topics. A damaged file still opens; the damage is reported
-    /// by [`Messages`] when it is reached.
+    /// Opens `path` and lists its topics. Reads the summary; if the summary is missing or
+    /// damaged (a recording cut short), reads the whole file once to rebuild it, checking
+    /// every chunk. A damaged file still opens: its intact part can be read, and the
+    /// damage is reported after the last message.
     pub fn open(path: impl AsRef<Path>) -> Result<Self, ReadError> {
         let path: Arc<Path> = Arc::from(path.as_ref());
         let open_error = |source| ReadError::Open {
@@ -45,18 +49,29 @@ impl BagReader {
         };
         let mut file = File::open(&path).map_err(open_error)?;
         let file_len = file.metadata().map_err(open_error)?.len();
-        let summary =
+        let found =
             source::read_summary(&mut file, file_len).filter(|s| !s.chunk_indexes.is_empty());
+        let (summary, damage, unchunked) = match found {
+            Some(summary) => (summary, None, false),
+            None => {
+                let r = recover(&mut file);
+                (r.summary, r.damage, r.unchunked)
+            }
+        };
         let mut bag = Self {
             path,
             file_len,
-            summary,
-            topics: Vec::new(),
+            topics: summary_topics(&summary),
+            summary: Some(summary),
+            damage,
         };
-        bag.topics = match bag.summary.as_ref().and_then(summary_topics) {
-            Some(topics) => topics,
-            None => bag.count_topics()?,
-        };
+        if unchunked {
+            bag.summary = None;
+            bag.damage = None; // the front-to-back stream finds it again
+        }
+        if bag.summary.as_ref().is_none_or(|s| s.stats.is_none()) {
+            bag.topics = bag.count_topics()?;
+        }
         Ok(bag)
     }
 
@@ -97,6 +112,7 @@ impl BagReader {
         Ok(Messages {
             path: self.path.to_path_buf(),
             source,
+            damage: self.damage.clone(),
             delivered: 0,
             done: false,
         })
@@ -117,9 +133,13 @@ impl BagReader {
     }
 }
 
-/// Topics and counts from the summary; `None` if it has no statistics.
-fn summary_topics(summary: &Summary) -> Option<Vec<TopicInfo>> {
-    let stats = summary.stats.as_ref()?;
+/// Topics and counts from the summary's statistics (0 where it has none).
+fn summary_topics(summary: &Summary) -> Vec<TopicInfo> {
+    let no_counts = BTreeMap::new();
+    let channel_counts = summary
+        .stats
+        .as_ref()
+        .map_or(&no_counts, |s| &s.channel_message_counts);
     let mut counts: BTreeMap<(String, String), u64> = BTreeMap::new();
     for (id, channel) in &summary.channels {
         let type_name = channel
@@ -127,12 +147,12 @@ fn summary_topics(summary: &Summary) -> Option<Vec<TopicInfo>> {
             .as_ref()
             .map(|s| s.name.clone())
             .unwrap_or_default();
-        let count = stats.channel_message_counts.get(id).copied().unwrap_or(0);
+        let count = channel_counts.get(id).copied().unwrap_or(0);
         *counts
             .entry((channel.topic.clone(), type_name))
             .or_default() += count;
     }
-    Some(into_topics(counts))
+    into_topics(counts)
 }
 
 /// Turns `(topic, type) → count` into a sorted topic list.
@@ -183,6 +203,8 @@ enum Source {
 pub struct Messages {
     path: PathBuf,
     source: Source,
+    /// Damage found when the bag was opened, yielded after the last message.
+    damage: Option<SourceError>,
     delivered: u64,
     done: bool,
 }
@@ -201,7 +223,8 @@ impl Iterator for Messages {
         match next {
             None => {
                 self.done = true;
-                None
+                let damage = self.damage.take()?;
+                Some(Err(to_read_error(&self.path, self.delivered, damage)))
             }
             Some(Err(e)) => {
                 self.done = true;

@@ -17,10 +17,10 @@ use std::sync::Arc;
 
 /// Largest record or decompressed chunk accepted (256 MiB). rosbag2 writes 4 MiB chunks;
 /// the cap keeps a corrupt length field from requesting gigabytes of memory.
-const MAX_RECORD_BYTES: usize = 256 << 20;
+pub(crate) const MAX_RECORD_BYTES: usize = 256 << 20;
 
 /// Largest piece read from the file at once.
-const READ_PIECE: usize = 64 << 10;
+pub(crate) const READ_PIECE: usize = 64 << 10;
 
 /// A message as read, before it is numbered.
 pub(crate) struct Raw {
@@ -34,14 +34,34 @@ pub(crate) struct Raw {
     pub data: Vec<u8>,
 }
 
-/// Why a source stopped, with the byte offset it had reached.
+/// Why a source stopped, with the byte offset it had reached. Cloneable, so the damage a
+/// recovery pass found can be reported by every stream over the file.
+#[derive(Debug, Clone)]
 pub(crate) enum SourceError {
     /// The parser rejected the data at `offset`.
-    Mcap { offset: u64, source: McapError },
+    Mcap { offset: u64, source: Arc<McapError> },
     /// Reading at `offset` failed.
-    Io { offset: u64, source: io::Error },
+    Io { offset: u64, source: Arc<io::Error> },
     /// A message named a channel that was never defined.
     UnknownChannel(u16),
+}
+
+impl SourceError {
+    /// A parser error at `offset`.
+    pub fn mcap(offset: u64, source: McapError) -> Self {
+        Self::Mcap {
+            offset,
+            source: Arc::new(source),
+        }
+    }
+
+    /// A read error at `offset`.
+    pub fn io(offset: u64, source: io::Error) -> Self {
+        Self::Io {
+            offset,
+            source: Arc::new(source),
+        }
+    }
 }
 
 /// Reads the summary section via the footer; `None` if the file has none or it is damaged,
@@ -154,15 +174,12 @@ impl IndexedSource {
         let mut options = IndexedReaderOptions::new().with_order(ReadOrder::LogTime);
         options.record_length_limit = Some(MAX_RECORD_BYTES);
         let reader = IndexedReader::new_with_options(summary, options)
-            .map_err(|source| SourceError::Mcap { offset: 0, source })?;
+            .map_err(|e| SourceError::mcap(0, e))?;
         let mut chunks = HashMap::new();
         for c in &summary.chunk_indexes {
             let at = c
                 .compressed_data_offset()
-                .map_err(|source| SourceError::Mcap {
-                    offset: c.chunk_start_offset,
-                    source,
-                })?;
+                .map_err(|e| SourceError::mcap(c.chunk_start_offset, e))?;
             chunks.insert(at, c.clone());
         }
         Ok(Self {
@@ -183,7 +200,7 @@ impl IndexedSource {
                 Ok(e) => e,
                 Err(source) => {
                     let offset = self.offset;
-                    return Some(Err(SourceError::Mcap { offset, source }));
+                    return Some(Err(SourceError::mcap(offset, source)));
                 }
             };
             match event {
@@ -210,16 +227,13 @@ impl IndexedSource {
     /// Reads the whole chunk record whose data starts at `data_offset`, checks its CRC and
     /// hands its data to the indexed reader.
     fn load_chunk(&mut self, data_offset: u64) -> Result<(), SourceError> {
-        let index = self.chunks.get(&data_offset).ok_or(SourceError::Mcap {
-            offset: data_offset,
-            source: McapError::BadIndex,
-        })?;
+        let index = self
+            .chunks
+            .get(&data_offset)
+            .ok_or_else(|| SourceError::mcap(data_offset, McapError::BadIndex))?;
         let start = index.chunk_start_offset;
         self.offset = start;
-        let corrupt = |source| SourceError::Mcap {
-            offset: start,
-            source,
-        };
+        let corrupt = |e| SourceError::mcap(start, e);
         let fits = start
             .checked_add(index.chunk_length)
             .is_some_and(|end| end <= self.file_len);
@@ -230,10 +244,7 @@ impl IndexedSource {
         self.file
             .seek(SeekFrom::Start(start))
             .and_then(|_| self.file.read_exact(&mut self.buf))
-            .map_err(|source| SourceError::Io {
-                offset: start,
-                source,
-            })?;
+            .map_err(|e| SourceError::io(start, e))?;
         if self.buf[0] != op::CHUNK {
             return Err(corrupt(McapError::BadIndex));
         }
@@ -245,16 +256,20 @@ impl IndexedSource {
         if header.compressed_size != data.len() as u64 {
             return Err(corrupt(McapError::BadIndex));
         }
-        check_chunk_crc(&self.buf).map_err(corrupt)?;
+        for_each_chunk_record(&self.buf, |_, _| Ok(())).map_err(corrupt)?;
         self.reader
             .insert_chunk_record_data(data_offset, &data)
             .map_err(corrupt)
     }
 }
 
-/// Decompresses the chunk record `record` (opcode and length included) and checks its CRC,
-/// with the same size limit as the readers.
-fn check_chunk_crc(record: &[u8]) -> Result<(), McapError> {
+/// Decompresses the chunk record `record` (opcode and length included), checks its CRC
+/// before anything else, then calls `each(opcode, body)` for every record inside it. Uses
+/// the same size limit as the readers.
+pub(crate) fn for_each_chunk_record(
+    record: &[u8],
+    mut each: impl FnMut(u8, &[u8]) -> Result<(), McapError>,
+) -> Result<(), McapError> {
     let options = LinearReaderOptions::default()
         .with_skip_start_magic(true)
         .with_skip_end_magic(true)
@@ -263,11 +278,14 @@ fn check_chunk_crc(record: &[u8]) -> Result<(), McapError> {
     let mut reader = LinearReader::new_with_options(options);
     let mut rest = record;
     while let Some(event) = reader.next_event() {
-        if let LinearReadEvent::ReadRequest(n) = event? {
-            let (piece, tail) = rest.split_at(n.min(rest.len()));
-            reader.insert(piece.len()).copy_from_slice(piece);
-            reader.notify_read(piece.len());
-            rest = tail;
+        match event? {
+            LinearReadEvent::ReadRequest(n) => {
+                let (piece, tail) = rest.split_at(n.min(rest.len()));
+                reader.insert(piece.len()).copy_from_slice(piece);
+                reader.notify_read(piece.len());
+                rest = tail;
+            }
+            LinearReadEvent::Record { opcode, data } => each(opcode, data)?,
         }
     }
     Ok(())
@@ -309,7 +327,7 @@ impl LinearSource {
     pub fn next(&mut self) -> Option<Result<Raw, SourceError>> {
         loop {
             let offset = self.fed;
-            let corrupt = |source| Some(Err(SourceError::Mcap { offset, source }));
+            let corrupt = |e| Some(Err(SourceError::mcap(offset, e)));
             let (opcode, data) = match self.reader.next_event()? {
                 Err(source) => return corrupt(source),
                 Ok(LinearReadEvent::ReadRequest(n)) => {
@@ -319,7 +337,7 @@ impl LinearSource {
                             self.reader.notify_read(read);
                             self.fed += read as u64;
                         }
-                        Err(source) => return Some(Err(SourceError::Io { offset, source })),
+                        Err(e) => return Some(Err(SourceError::io(offset, e))),
                     }
                     continue;
                 }
