@@ -26,10 +26,13 @@
 //! ```
 
 mod error;
+mod indexed;
+mod linear;
 mod message;
 pub mod reader;
 mod recover;
 mod source;
+mod summary;
 pub mod writer;
 
 pub use error::{MessageError, ReadError, WriteError};

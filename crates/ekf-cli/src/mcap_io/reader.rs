@@ -2,9 +2,12 @@
 //! read incrementally from the file, so memory does not grow with the file.
 
 use super::error::ReadError;
+use super::indexed::IndexedSource;
+use super::linear::LinearSource;
 use super::message::{BagMessage, TopicInfo};
 use super::recover::recover;
-use super::source::{self, IndexedSource, LinearSource, Raw, SourceError};
+use super::source::{Raw, SourceError};
+use super::summary;
 use mcap::Summary;
 use std::collections::BTreeMap;
 use std::fs::File;
@@ -50,7 +53,7 @@ impl BagReader {
         let mut file = File::open(&path).map_err(open_error)?;
         let file_len = file.metadata().map_err(open_error)?.len();
         let found =
-            source::read_summary(&mut file, file_len).filter(|s| !s.chunk_indexes.is_empty());
+            summary::read_summary(&mut file, file_len).filter(|s| !s.chunk_indexes.is_empty());
         let (summary, damage, unchunked) = match found {
             Some(summary) => (summary, None, false),
             None => {
@@ -58,20 +61,20 @@ impl BagReader {
                 (r.summary, r.damage, r.unchunked)
             }
         };
+        // A rebuilt summary always has statistics; a file's own may lack them.
+        let topics = summary.stats.is_some().then(|| summary_topics(&summary));
         let mut bag = Self {
             path,
             file_len,
-            topics: summary_topics(&summary),
-            summary: Some(summary),
-            damage,
+            // Unchunked files stream front to back, which finds any damage by itself.
+            summary: (!unchunked).then_some(summary),
+            damage: damage.filter(|_| !unchunked),
+            topics: Vec::new(),
         };
-        if unchunked {
-            bag.summary = None;
-            bag.damage = None; // the front-to-back stream finds it again
-        }
-        if bag.summary.as_ref().is_none_or(|s| s.stats.is_none()) {
-            bag.topics = bag.count_topics()?;
-        }
+        bag.topics = match topics {
+            Some(topics) => topics,
+            None => bag.count_topics()?,
+        };
         Ok(bag)
     }
 
@@ -102,7 +105,7 @@ impl BagReader {
         })?;
         let source = match &self.summary {
             Some(summary) => {
-                let channels = source::summary_channels(summary, &self.path);
+                let channels = summary::summary_channels(summary, &self.path);
                 let indexed = IndexedSource::new(file, self.file_len, summary, channels)
                     .map_err(|e| to_read_error(&self.path, 0, e))?;
                 Source::Indexed(Box::new(indexed))
@@ -133,7 +136,7 @@ impl BagReader {
     }
 }
 
-/// Topics and counts from the summary's statistics (0 where it has none).
+/// Topics and counts from the summary's statistics (0 for channels they do not list).
 fn summary_topics(summary: &Summary) -> Vec<TopicInfo> {
     let no_counts = BTreeMap::new();
     let channel_counts = summary

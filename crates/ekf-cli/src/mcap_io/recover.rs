@@ -1,7 +1,8 @@
 //! Rebuilding the index of a bag whose summary is missing or damaged (a recording cut
 //! short): one pass over the file that checks every chunk and notes where it lies.
 
-use super::source::{for_each_chunk_record, SourceError, MAX_RECORD_BYTES, READ_PIECE};
+use super::indexed::for_each_chunk_record;
+use super::source::{SourceError, MAX_RECORD_BYTES, READ_PIECE};
 use mcap::records::{op, ChunkIndex, Record, Statistics};
 use mcap::sans_io::{LinearReadEvent, LinearReader, LinearReaderOptions};
 use mcap::{Channel, McapError, Schema, Summary};
