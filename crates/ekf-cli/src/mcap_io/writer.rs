@@ -10,8 +10,11 @@ use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
-/// Channel metadata key the `ros2` profile requires; empty means the default QoS.
+/// Channel metadata key the `ros2` profile requires.
 const QOS_KEY: &str = "offered_qos_profiles";
+/// An empty YAML list of offered QoS profiles: `ros2 bag play` then uses its default QoS.
+/// A list is what every rosbag2 version parses; its enum spelling changed between distros.
+const NO_QOS_PROFILES: &str = "[]";
 
 /// A ROS 2 bag being written. Call [`Self::finish`] to close it and see errors; if it is
 /// dropped unfinished (say the caller returned early with an error), `Drop` finishes it
@@ -132,7 +135,7 @@ impl BagWriter {
         let schema_id = writer
             .add_schema(def.name, SCHEMA_ENCODING, def.schema_text().as_bytes())
             .map_err(|source| mcap_error(path, topic, source))?;
-        let metadata = BTreeMap::from([(QOS_KEY.to_owned(), String::new())]);
+        let metadata = BTreeMap::from([(QOS_KEY.to_owned(), NO_QOS_PROFILES.to_owned())]);
         let id = writer
             .add_channel(schema_id, topic, MESSAGE_ENCODING, &metadata)
             .map_err(|source| mcap_error(path, topic, source))?;
