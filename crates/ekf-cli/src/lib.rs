@@ -5,6 +5,8 @@
 pub mod commands;
 pub mod eval;
 pub mod import;
+pub mod mcap_io;
 pub mod plot;
+pub mod ros2;
 pub mod trajectory;
 pub mod tum;

@@ -1,0 +1,176 @@
+//! Errors of bag reading, writing and typed decoding; each says which file, where in it
+//! (byte offset or message index), which topic and what was expected.
+
+use crate::ros2::DecodeError;
+use std::path::PathBuf;
+use std::sync::Arc;
+use thiserror::Error;
+
+/// Why a bag could not be opened or read further.
+#[derive(Debug, Error)]
+pub enum ReadError {
+    /// The file could not be opened or its size read.
+    #[error("{path}: cannot open: {source}", path = path.display())]
+    Open {
+        /// The bag.
+        path: PathBuf,
+        /// The operating system's error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// Reading the file failed.
+    #[error("{path}: read error at byte {offset}: {source}", path = path.display())]
+    Io {
+        /// The bag.
+        path: PathBuf,
+        /// Where the read started.
+        offset: u64,
+        /// The operating system's error.
+        #[source]
+        source: Arc<std::io::Error>,
+    },
+    /// The file is truncated or corrupt; everything before `offset` was delivered.
+    #[error(
+        "{path}: truncated or corrupt MCAP at byte {offset} (after {messages} messages): {source}",
+        path = path.display()
+    )]
+    Corrupt {
+        /// The bag.
+        path: PathBuf,
+        /// Byte offset where the damage was found: the end of the data read so far, or the
+        /// start of the chunk that failed.
+        offset: u64,
+        /// How many messages were delivered before the damage.
+        messages: u64,
+        /// What the MCAP parser found.
+        #[source]
+        source: Arc<mcap::McapError>,
+    },
+    /// A message refers to a channel or schema the file never defined.
+    #[error(
+        "{path}: message {index} refers to channel {channel_id}, which the file does not define",
+        path = path.display()
+    )]
+    UnknownChannel {
+        /// The bag.
+        path: PathBuf,
+        /// Index of the message in delivery order.
+        index: u64,
+        /// The undefined channel id.
+        channel_id: u16,
+    },
+}
+
+/// Why a message could not be decoded into the type asked for.
+#[derive(Debug, Error)]
+pub enum MessageError {
+    /// The topic carries a different message type.
+    #[error(
+        "{path}: topic `{topic}` (message {index}): expected {expected}, found {actual}",
+        path = path.display()
+    )]
+    WrongType {
+        /// The bag.
+        path: PathBuf,
+        /// The topic.
+        topic: String,
+        /// Index of the message in delivery order.
+        index: u64,
+        /// The type asked for.
+        expected: &'static str,
+        /// The type the channel's schema names.
+        actual: String,
+    },
+    /// The channel is not CDR-encoded with a `ros2msg` schema.
+    #[error(
+        "{path}: topic `{topic}` uses message encoding `{message_encoding}` and schema encoding \
+         `{schema_encoding}`, expected `cdr` and `ros2msg`",
+        path = path.display()
+    )]
+    Encoding {
+        /// The bag.
+        path: PathBuf,
+        /// The topic.
+        topic: String,
+        /// The channel's message encoding.
+        message_encoding: String,
+        /// The schema's encoding.
+        schema_encoding: String,
+    },
+    /// The payload is not a valid message of its type, or the type is not supported.
+    #[error(
+        "{path}: topic `{topic}` (message {index}, log time {log_time} ns): {source}",
+        path = path.display()
+    )]
+    Decode {
+        /// The bag.
+        path: PathBuf,
+        /// The topic.
+        topic: String,
+        /// Index of the message in delivery order.
+        index: u64,
+        /// The message's log time (ns).
+        log_time: u64,
+        /// What the decoder found.
+        #[source]
+        source: DecodeError,
+    },
+}
+
+/// Why a bag could not be written.
+#[derive(Debug, Error)]
+pub enum WriteError {
+    /// The file could not be created.
+    #[error("{path}: cannot create: {source}", path = path.display())]
+    Create {
+        /// The bag.
+        path: PathBuf,
+        /// The operating system's error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The MCAP writer failed (I/O or a full channel table).
+    #[error("{path}: writing topic `{topic}`: {source}", path = path.display())]
+    Mcap {
+        /// The bag.
+        path: PathBuf,
+        /// The topic being written, or empty while finishing the file.
+        topic: String,
+        /// The writer's error.
+        #[source]
+        source: mcap::McapError,
+    },
+    /// The message could not be encoded.
+    #[error("{path}: encoding a message for `{topic}`: {source}", path = path.display())]
+    Encode {
+        /// The bag.
+        path: PathBuf,
+        /// The topic.
+        topic: String,
+        /// The encoder's error.
+        #[source]
+        source: crate::ros2::CdrError,
+    },
+    /// The message's stamp is negative, so it has no nanosecond log time.
+    #[error(
+        "{path}: message for `{topic}` has a negative stamp ({sec} s); log times are unsigned",
+        path = path.display()
+    )]
+    NegativeStamp {
+        /// The bag.
+        path: PathBuf,
+        /// The topic.
+        topic: String,
+        /// The stamp's seconds.
+        sec: i32,
+    },
+    /// The file was written but could not be flushed to disk.
+    #[error("{path}: flushing: {source}", path = path.display())]
+    Flush {
+        /// The bag.
+        path: PathBuf,
+        /// The operating system's error.
+        #[source]
+        source: std::io::Error,
+    },
+}

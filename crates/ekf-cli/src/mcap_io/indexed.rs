@@ -1,0 +1,159 @@
+//! Messages in log-time order through the chunk indexes, around the `mcap` crate's sans-io
+//! `IndexedReader`, with each chunk's CRC checked before any of its messages is delivered.
+
+use super::message::ChannelInfo;
+use super::source::{Raw, SourceError, MAX_RECORD_BYTES};
+use mcap::records::{op, ChunkIndex, Record};
+use mcap::sans_io::indexed_reader::ReadOrder;
+use mcap::sans_io::{
+    IndexedReadEvent, IndexedReader, IndexedReaderOptions, LinearReadEvent, LinearReader,
+    LinearReaderOptions,
+};
+use mcap::{McapError, Summary};
+use std::collections::HashMap;
+use std::fs::File;
+use std::io::{Read, Seek, SeekFrom};
+use std::sync::Arc;
+
+/// Messages in log-time order (ties in file order) from a file with chunk indexes. Each
+/// chunk's CRC is checked before any of its messages is delivered. Memory: the chunks whose
+/// time ranges overlap the current message, one chunk in the usual case.
+pub(crate) struct IndexedSource {
+    file: File,
+    file_len: u64,
+    reader: IndexedReader,
+    channels: HashMap<u16, Arc<ChannelInfo>>,
+    /// Chunk records by the offset of their compressed data (what the reader asks for).
+    chunks: HashMap<u64, ChunkIndex>,
+    buf: Vec<u8>,
+    /// Start of the chunk read last, for error messages.
+    offset: u64,
+}
+
+impl IndexedSource {
+    /// Prepares to read the chunks `summary` indexes.
+    pub fn new(
+        file: File,
+        file_len: u64,
+        summary: &Summary,
+        channels: HashMap<u16, Arc<ChannelInfo>>,
+    ) -> Result<Self, SourceError> {
+        let mut options = IndexedReaderOptions::new().with_order(ReadOrder::LogTime);
+        options.record_length_limit = Some(MAX_RECORD_BYTES);
+        let reader = IndexedReader::new_with_options(summary, options)
+            .map_err(|e| SourceError::mcap(0, e))?;
+        let mut chunks = HashMap::new();
+        for c in &summary.chunk_indexes {
+            let at = c
+                .compressed_data_offset()
+                .map_err(|e| SourceError::mcap(c.chunk_start_offset, e))?;
+            chunks.insert(at, c.clone());
+        }
+        Ok(Self {
+            file,
+            file_len,
+            reader,
+            channels,
+            chunks,
+            buf: Vec::new(),
+            offset: 0,
+        })
+    }
+
+    /// The next message, `None` after the last.
+    pub fn next(&mut self) -> Option<Result<Raw, SourceError>> {
+        loop {
+            let event = match self.reader.next_event()? {
+                Ok(e) => e,
+                Err(source) => {
+                    let offset = self.offset;
+                    return Some(Err(SourceError::mcap(offset, source)));
+                }
+            };
+            match event {
+                IndexedReadEvent::ReadChunkRequest { offset, .. } => {
+                    if let Err(e) = self.load_chunk(offset) {
+                        return Some(Err(e));
+                    }
+                }
+                IndexedReadEvent::Message { header, data } => {
+                    let Some(channel) = self.channels.get(&header.channel_id) else {
+                        return Some(Err(SourceError::UnknownChannel(header.channel_id)));
+                    };
+                    return Some(Ok(Raw {
+                        channel: Arc::clone(channel),
+                        log_time: header.log_time,
+                        publish_time: header.publish_time,
+                        data: data.to_vec(),
+                    }));
+                }
+            }
+        }
+    }
+
+    /// Reads the whole chunk record whose data starts at `data_offset`, checks its CRC and
+    /// hands its data to the indexed reader.
+    fn load_chunk(&mut self, data_offset: u64) -> Result<(), SourceError> {
+        let index = self
+            .chunks
+            .get(&data_offset)
+            .ok_or_else(|| SourceError::mcap(data_offset, McapError::BadIndex))?;
+        let start = index.chunk_start_offset;
+        self.offset = start;
+        let corrupt = |e| SourceError::mcap(start, e);
+        let fits = start
+            .checked_add(index.chunk_length)
+            .is_some_and(|end| end <= self.file_len);
+        if !fits || index.chunk_length < 9 {
+            return Err(corrupt(McapError::BadIndex));
+        }
+        self.buf.resize(index.chunk_length as usize, 0);
+        self.file
+            .seek(SeekFrom::Start(start))
+            .and_then(|_| self.file.read_exact(&mut self.buf))
+            .map_err(|e| SourceError::io(start, e))?;
+        if self.buf[0] != op::CHUNK {
+            return Err(corrupt(McapError::BadIndex));
+        }
+        let (header, data) = match mcap::parse_record(op::CHUNK, &self.buf[9..]) {
+            Ok(Record::Chunk { header, data }) => (header, data),
+            Ok(_) => return Err(corrupt(McapError::BadIndex)),
+            Err(e) => return Err(corrupt(e)),
+        };
+        if header.compressed_size != data.len() as u64 {
+            return Err(corrupt(McapError::BadIndex));
+        }
+        for_each_chunk_record(&self.buf, |_, _| Ok(())).map_err(corrupt)?;
+        self.reader
+            .insert_chunk_record_data(data_offset, &data)
+            .map_err(corrupt)
+    }
+}
+
+/// Decompresses the chunk record `record` (opcode and length included), checks its CRC
+/// before anything else, then calls `each(opcode, body)` for every record inside it. Uses
+/// the same size limit as the readers.
+pub(crate) fn for_each_chunk_record(
+    record: &[u8],
+    mut each: impl FnMut(u8, &[u8]) -> Result<(), McapError>,
+) -> Result<(), McapError> {
+    let options = LinearReaderOptions::default()
+        .with_skip_start_magic(true)
+        .with_skip_end_magic(true)
+        .with_prevalidate_chunk_crcs(true)
+        .with_record_length_limit(MAX_RECORD_BYTES);
+    let mut reader = LinearReader::new_with_options(options);
+    let mut rest = record;
+    while let Some(event) = reader.next_event() {
+        match event? {
+            LinearReadEvent::ReadRequest(n) => {
+                let (piece, tail) = rest.split_at(n.min(rest.len()));
+                reader.insert(piece.len()).copy_from_slice(piece);
+                reader.notify_read(piece.len());
+                rest = tail;
+            }
+            LinearReadEvent::Record { opcode, data } => each(opcode, data)?,
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,262 @@
+//! Truncated and corrupted bags: every message before the damage is delivered, then one
+//! error that names the file and the byte where reading broke.
+
+mod mcap_common;
+
+use ekf_cli::mcap_io::{BagReader, BagWriter, MessageOrder, ReadError};
+use ekf_cli::ros2::sensor_msgs::LaserScan;
+use ekf_cli::ros2::RosMessage;
+use mcap_common::{read_all_ok, scan, write_multi_chunk_bag};
+use std::path::Path;
+
+/// Number of 80 kB scans: about six 1 MiB chunks.
+const SCANS: u64 = 70;
+
+fn corrupt_offset(err: &ReadError) -> u64 {
+    match err {
+        ReadError::Corrupt { offset, .. } => *offset,
+        other => panic!("expected a Corrupt error, got {other}"),
+    }
+}
+
+#[test]
+fn truncated_files_deliver_everything_before_the_cut_then_say_where() {
+    let dir = tempfile::tempdir().unwrap();
+    let full = dir.path().join("full.mcap");
+    let original = write_multi_chunk_bag(&full, SCANS);
+    assert_eq!(original.len() as u64, SCANS);
+    let bytes = std::fs::read(&full).unwrap();
+    let len = bytes.len();
+
+    let mut previous = 0;
+    for cut in [
+        0,
+        5,
+        9,
+        200,
+        len / 4,
+        len / 2,
+        3 * len / 4,
+        len - 200,
+        len - 30,
+        len - 1,
+    ] {
+        let path = dir.path().join(format!("cut_{cut}.mcap"));
+        std::fs::write(&path, &bytes[..cut]).unwrap();
+        let bag = BagReader::open(&path).unwrap();
+        assert_eq!(
+            bag.order(),
+            MessageOrder::LogTime,
+            "cut at {cut}: index rebuilt"
+        );
+
+        let (delivered, err) = read_all_ok(&path);
+        let err = err.unwrap_or_else(|| panic!("cut at {cut}: no error reported"));
+        assert_eq!(delivered[..], original[..delivered.len()], "cut at {cut}");
+        assert!(
+            delivered.len() >= previous,
+            "cut at {cut}: fewer than a shorter cut"
+        );
+        previous = delivered.len();
+        let counted: u64 = bag.topics().iter().map(|t| t.message_count).sum();
+        assert_eq!(
+            counted,
+            delivered.len() as u64,
+            "cut at {cut}: topic counts"
+        );
+
+        assert!(corrupt_offset(&err) <= cut as u64, "cut at {cut}: {err}");
+        let text = err.to_string();
+        assert!(text.contains(&format!("cut_{cut}.mcap")), "{text}");
+        assert!(text.contains("byte"), "{text}");
+        assert!(
+            text.contains(&format!("after {} messages", delivered.len())),
+            "{text}"
+        );
+    }
+    assert!(
+        previous as u64 == SCANS,
+        "a cut in the summary loses no message"
+    );
+}
+
+/// Chunk indexes of the file at `path`.
+fn chunk_indexes(path: &Path) -> Vec<mcap::records::ChunkIndex> {
+    let bytes = std::fs::read(path).unwrap();
+    mcap::Summary::read(&bytes).unwrap().unwrap().chunk_indexes
+}
+
+#[test]
+fn a_flipped_byte_in_a_chunk_stops_at_that_chunk() {
+    let dir = tempfile::tempdir().unwrap();
+    let full = dir.path().join("full.mcap");
+    let original = write_multi_chunk_bag(&full, SCANS);
+    let chunks = chunk_indexes(&full);
+    assert!(
+        chunks.len() >= 4,
+        "need several chunks, got {}",
+        chunks.len()
+    );
+    let bytes = std::fs::read(&full).unwrap();
+
+    for k in [0, 2, chunks.len() - 1] {
+        let chunk = &chunks[k];
+        let data = chunk.compressed_data_offset().unwrap();
+        for at in [
+            data,
+            data + chunk.compressed_size / 2,
+            data + chunk.compressed_size - 1,
+        ] {
+            let mut damaged = bytes.clone();
+            damaged[at as usize] ^= 0x5A;
+            let path = dir.path().join(format!("flip_{at}.mcap"));
+            std::fs::write(&path, &damaged).unwrap();
+
+            let (delivered, err) = read_all_ok(&path);
+            let err = err.unwrap_or_else(|| panic!("flip at {at}: not detected"));
+            let before = original
+                .iter()
+                .filter(|(t, _)| *t < chunk.message_start_time)
+                .count();
+            assert_eq!(delivered.len(), before, "flip at {at} in chunk {k}: {err}");
+            assert_eq!(delivered[..], original[..before]);
+            assert_eq!(corrupt_offset(&err), chunk.chunk_start_offset, "{err}");
+        }
+    }
+}
+
+#[test]
+fn a_flipped_byte_in_a_truncated_file_stops_at_that_chunk() {
+    let dir = tempfile::tempdir().unwrap();
+    let full = dir.path().join("full.mcap");
+    let original = write_multi_chunk_bag(&full, SCANS);
+    let chunks = chunk_indexes(&full);
+    let mut bytes = std::fs::read(&full).unwrap();
+    let chunk = &chunks[1];
+    let at = chunk.compressed_data_offset().unwrap() + chunk.compressed_size / 3;
+    bytes[at as usize] ^= 0xFF;
+    bytes.truncate(bytes.len() - 100);
+    let path = dir.path().join("flip_and_cut.mcap");
+    std::fs::write(&path, &bytes).unwrap();
+
+    let (delivered, err) = read_all_ok(&path);
+    let err = err.expect("damage reported");
+    let before = original
+        .iter()
+        .filter(|(t, _)| *t < chunk.message_start_time)
+        .count();
+    assert_eq!(delivered[..], original[..before]);
+    let offset = corrupt_offset(&err);
+    let chunk_end = chunk.chunk_start_offset + chunk.chunk_length;
+    assert!(
+        (chunk.chunk_start_offset..=chunk_end).contains(&offset),
+        "{offset} outside chunk {}..{chunk_end}: {err}",
+        chunk.chunk_start_offset
+    );
+}
+
+#[test]
+fn a_flipped_byte_in_the_summary_is_not_trusted_and_reported_after_the_messages() {
+    let dir = tempfile::tempdir().unwrap();
+    let full = dir.path().join("full.mcap");
+    let original = write_multi_chunk_bag(&full, SCANS);
+    let mut bytes = std::fs::read(&full).unwrap();
+    let footer = mcap::read::footer(&bytes).unwrap();
+    let at = (footer.summary_start as usize + bytes.len()) / 2;
+    bytes[at] ^= 0x01;
+    let path = dir.path().join("bad_summary.mcap");
+    std::fs::write(&path, &bytes).unwrap();
+
+    let bag = BagReader::open(&path).unwrap();
+    assert_eq!(
+        bag.order(),
+        MessageOrder::LogTime,
+        "damaged summary is rebuilt"
+    );
+    assert_eq!(bag.topics()[0].message_count, SCANS);
+    let (delivered, err) = read_all_ok(&path);
+    assert_eq!(delivered, original);
+    let err = err.expect("summary damage reported after the messages");
+    assert!(corrupt_offset(&err) >= footer.summary_start, "{err}");
+}
+
+#[test]
+fn a_truncated_bag_written_out_of_order_is_still_read_in_log_time_order() {
+    let dir = tempfile::tempdir().unwrap();
+    let full = dir.path().join("full.mcap");
+    let mut writer = BagWriter::create(&full).unwrap();
+    let times: Vec<u64> = (0..40).map(|i| 1_000_000_000 + i * 10_000_000).collect();
+    for (a, b) in times.iter().zip(times.iter().rev()) {
+        writer.write("/scan", &scan(*a, 20_000)).unwrap();
+        writer.write("/scan_rear", &scan(*b + 1, 20_000)).unwrap();
+    }
+    writer.finish().unwrap();
+    let bytes = std::fs::read(&full).unwrap();
+    let path = dir.path().join("cut.mcap");
+    std::fs::write(&path, &bytes[..bytes.len() * 2 / 3]).unwrap();
+
+    let bag = BagReader::open(&path).unwrap();
+    assert_eq!(bag.order(), MessageOrder::LogTime);
+    let (delivered, err) = read_all_ok(&path);
+    assert!(err.is_some());
+    assert!(delivered.len() > 10, "only {} delivered", delivered.len());
+    let log_times: Vec<u64> = delivered.iter().map(|(t, _)| *t).collect();
+    assert!(log_times.windows(2).all(|w| w[0] <= w[1]), "{log_times:?}");
+}
+
+#[test]
+fn unchunked_files_are_read_in_file_order() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("unchunked.mcap");
+    let mut writer = mcap::WriteOptions::new()
+        .profile("ros2")
+        .use_chunks(false)
+        .create(std::io::BufWriter::new(
+            std::fs::File::create(&path).unwrap(),
+        ))
+        .unwrap();
+    let schema = writer
+        .add_schema(
+            LaserScan::type_name(),
+            "ros2msg",
+            LaserScan::schema_text().as_bytes(),
+        )
+        .unwrap();
+    let channel = writer
+        .add_channel(schema, "/scan", "cdr", &Default::default())
+        .unwrap();
+    for (sequence, t) in [3_000u64, 1_000, 2_000].into_iter().enumerate() {
+        let header = mcap::records::MessageHeader {
+            channel_id: channel,
+            sequence: sequence as u32,
+            log_time: t,
+            publish_time: t,
+        };
+        let data = scan(t, 2).encode().unwrap();
+        writer.write_to_known_channel(&header, &data).unwrap();
+    }
+    writer.finish().unwrap();
+    drop(writer);
+
+    let bag = BagReader::open(&path).unwrap();
+    assert_eq!(bag.order(), MessageOrder::File);
+    assert_eq!(bag.topics()[0].message_count, 3);
+    let times: Vec<u64> = bag
+        .messages()
+        .unwrap()
+        .map(|m| {
+            let m = m.unwrap();
+            let s: LaserScan = m.decode_as().unwrap();
+            assert_eq!(s.header.stamp.to_nanos(), Some(m.log_time));
+            m.log_time
+        })
+        .collect();
+    assert_eq!(times, [3_000, 1_000, 2_000]);
+}
+
+#[test]
+fn a_missing_file_names_the_path() {
+    let err = BagReader::open("/nonexistent/run.mcap").unwrap_err();
+    assert!(matches!(err, ReadError::Open { .. }));
+    assert!(err.to_string().contains("/nonexistent/run.mcap"), "{err}");
+}
