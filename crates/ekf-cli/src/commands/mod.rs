@@ -2,3 +2,4 @@
 //! `main.rs` prints it.
 
 pub mod evaluate;
+pub mod import;

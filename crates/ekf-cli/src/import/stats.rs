@@ -3,7 +3,7 @@
 use super::record::ImportRecord;
 
 /// Counts kept while importing; complete once the iterator has returned `None`.
-#[derive(Debug, Clone, Default, PartialEq, Eq)]
+#[derive(Debug, Clone, Default, PartialEq, Eq, serde::Serialize)]
 pub struct ImportStats {
     /// Odometry records yielded.
     pub odometry: u64,

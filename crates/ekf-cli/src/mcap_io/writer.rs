@@ -119,6 +119,27 @@ impl BagWriter {
             .map_err(|source| mcap_error(path, topic, source))
     }
 
+    /// Writes an MCAP metadata record `name` with string key/value pairs (provenance,
+    /// labels such as a synthetic sensor's parameters).
+    pub fn write_metadata(
+        &mut self,
+        name: &str,
+        entries: &[(&str, String)],
+    ) -> Result<(), WriteError> {
+        let metadata = mcap::records::Metadata {
+            name: name.to_owned(),
+            metadata: entries
+                .iter()
+                .map(|(k, v)| ((*k).to_owned(), v.clone()))
+                .collect(),
+        };
+        let path = &self.path;
+        let writer = self.inner.as_mut().ok_or_else(|| finished(path, name))?;
+        writer
+            .write_metadata(&metadata)
+            .map_err(|source| mcap_error(path, name, source))
+    }
+
     /// Writes the last chunk, the summary and the footer, and flushes the file.
     pub fn finish(mut self) -> Result<(), WriteError> {
         self.close()

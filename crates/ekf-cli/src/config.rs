@@ -1,0 +1,233 @@
+//! The `ekf` configuration file (TOML): topics, motion source, initial pose, compass
+//! calibration, laser mounting source, and the filter's own [`LocalizerConfig`]. Every
+//! key has a default; `ekf config` prints [`DEFAULT_TOML`], the documented defaults.
+//! Unknown keys are errors (a typo must not silently fall back to a default).
+
+use lrf_lines::LocalizerConfig;
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// The documented default configuration, as `ekf config` prints it. A test checks that
+/// it parses to exactly [`Config::default`].
+pub const DEFAULT_TOML: &str = include_str!("default_config.toml");
+
+/// Why a configuration could not be used.
+#[derive(Debug, thiserror::Error)]
+pub enum ConfigError {
+    /// The file could not be read.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: String,
+        /// What the OS said.
+        source: std::io::Error,
+    },
+    /// The file is not valid TOML or has a wrong key or value; the message names the
+    /// line, column and key.
+    #[error("{path}: {message}")]
+    Parse {
+        /// The file.
+        path: String,
+        /// The parser's message (line, column, key, what was expected).
+        message: String,
+    },
+    /// A value is out of range.
+    #[error("{path}: {key}: {message}")]
+    Invalid {
+        /// The file.
+        path: String,
+        /// The offending key, dotted (`localizer.robot.track`).
+        key: String,
+        /// What was expected.
+        message: String,
+    },
+}
+
+/// The whole configuration.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+#[serde(default, deny_unknown_fields)]
+pub struct Config {
+    /// Topic names of the input log.
+    pub topics: Topics,
+    /// Where the motion comes from.
+    pub motion: MotionConfig,
+    /// The initial pose and its uncertainty (unless `--init-from-truth`).
+    pub initial: InitialPose,
+    /// How a `sensor_msgs/MagneticField` becomes a map heading.
+    pub compass_calibration: CompassCalibrationConfig,
+    /// Where the laser's mounting pose comes from.
+    pub laser: LaserConfig,
+    /// The filter: robot, noise models, laser mount, extraction, matching, compass.
+    pub localizer: LocalizerConfig,
+}
+
+/// Topic names (DESIGN.md §5 defaults).
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Topics {
+    /// `sensor_msgs/msg/JointState` with the wheel joints.
+    pub joint_states: String,
+    /// `nav_msgs/msg/Odometry`, the alternative motion source.
+    pub odom: String,
+    /// `sensor_msgs/msg/LaserScan`.
+    pub scan: String,
+    /// `sensor_msgs/msg/Imu` (orientation yaw) or `sensor_msgs/msg/MagneticField`.
+    pub compass: String,
+    /// `nav_msgs/msg/Odometry` or `geometry_msgs/msg/PoseStamped`: the reference.
+    pub ground_truth: String,
+    /// `tf2_msgs/msg/TFMessage` with the static transforms.
+    pub tf_static: String,
+}
+
+impl Default for Topics {
+    fn default() -> Self {
+        Self {
+            joint_states: "/joint_states".into(),
+            odom: "/odom".into(),
+            scan: "/scan".into(),
+            compass: "/compass".into(),
+            ground_truth: "/ground_truth".into(),
+            tf_static: "/tf_static".into(),
+        }
+    }
+}
+
+/// Which motion source drives the prediction.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum MotionSource {
+    /// Wheel speeds from the joint states when the log has that topic, else odometry.
+    Auto,
+    /// Wheel speeds from `sensor_msgs/JointState` (paper eqs. 1–9).
+    JointStates,
+    /// Pose deltas of `nav_msgs/Odometry` with the odometry noise model.
+    Odom,
+}
+
+/// The motion source and the wheel joints.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct MotionConfig {
+    /// `auto`, `joint_states` or `odom`.
+    pub source: MotionSource,
+    /// Name of the left wheel joint in the joint states.
+    pub left_joint: String,
+    /// Name of the right wheel joint in the joint states.
+    pub right_joint: String,
+}
+
+impl Default for MotionConfig {
+    fn default() -> Self {
+        Self { source: MotionSource::Auto, left_joint: "left_wheel_joint".into(), right_joint: "right_wheel_joint".into() }
+    }
+}
+
+/// The initial pose (map frame) and its standard deviations.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct InitialPose {
+    /// x (m).
+    pub x: f64,
+    /// y (m).
+    pub y: f64,
+    /// Heading (rad).
+    pub theta: f64,
+    /// Standard deviation of x and y (m).
+    pub sigma_xy: f64,
+    /// Standard deviation of the heading (rad).
+    pub sigma_theta: f64,
+}
+
+impl Default for InitialPose {
+    fn default() -> Self {
+        Self { x: 0.0, y: 0.0, theta: 0.0, sigma_xy: 0.05, sigma_theta: 0.02 }
+    }
+}
+
+/// Raw magnetometer → map heading: `θ = wrap(π/2 − (bearing + declination)) + map_offset`
+/// (`ekf_core::heading_from_compass_bearing`). An `Imu` orientation is already an ENU yaw
+/// and only gets `map_offset`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+#[serde(default, deny_unknown_fields)]
+pub struct CompassCalibrationConfig {
+    /// Magnetic declination, east-positive (rad).
+    pub declination: f64,
+    /// Rotation from ENU to the map frame (rad): 0 when the map's x axis points east.
+    pub map_offset: f64,
+}
+
+/// Where the laser's mounting pose comes from.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct LaserConfig {
+    /// Use the transform `base_frame` → the scan's `frame_id` from `/tf_static` when the
+    /// log has it (as ROS 2 bags do); otherwise `localizer.laser_mount`.
+    pub mount_from_tf_static: bool,
+    /// The robot's base frame in the TF tree.
+    pub base_frame: String,
+}
+
+impl Default for LaserConfig {
+    fn default() -> Self {
+        Self { mount_from_tf_static: true, base_frame: "base_link".into() }
+    }
+}
+
+impl Config {
+    /// Parses TOML text; `path` names the source in errors.
+    pub fn from_toml(text: &str, path: &str) -> Result<Self, ConfigError> {
+        let config: Config = toml::from_str(text).map_err(|e| ConfigError::Parse { path: path.into(), message: e.to_string().trim_end().to_string() })?;
+        config.validated(path)
+    }
+
+    /// Reads and parses a TOML file.
+    pub fn load(path: &Path) -> Result<Self, ConfigError> {
+        let name = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Io { path: name.clone(), source })?;
+        Self::from_toml(&text, &name)
+    }
+
+    /// Checks the values that serde cannot: positive lengths and deviations, probabilities
+    /// in (0, 1), valid extraction parameters.
+    pub fn validated(self, path: &str) -> Result<Self, ConfigError> {
+        let invalid = |key: &str, message: &str| ConfigError::Invalid { path: path.into(), key: key.into(), message: message.into() };
+        let l = &self.localizer;
+        let positive = [
+            ("localizer.robot.wheel_radius", l.robot.wheel_radius),
+            ("localizer.robot.track", l.robot.track),
+            ("initial.sigma_xy", self.initial.sigma_xy),
+            ("initial.sigma_theta", self.initial.sigma_theta),
+            ("localizer.compass.variance", l.compass.variance),
+        ];
+        for (key, v) in positive {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(invalid(key, &format!("expected a finite number > 0, found {v}")));
+            }
+        }
+        let probabilities = [("localizer.compass.gate_probability", l.compass.gate_probability), ("localizer.matching.gate_probability", l.matching.gate_probability)];
+        for (key, p) in probabilities {
+            if !(p > 0.0 && p < 1.0) {
+                return Err(invalid(key, &format!("expected a probability in (0, 1), found {p}")));
+            }
+        }
+        let finite = [
+            ("initial.x", self.initial.x),
+            ("initial.y", self.initial.y),
+            ("initial.theta", self.initial.theta),
+            ("localizer.laser_mount.x", l.laser_mount.x),
+            ("localizer.laser_mount.y", l.laser_mount.y),
+            ("localizer.laser_mount.theta", l.laser_mount.theta),
+            ("compass_calibration.declination", self.compass_calibration.declination),
+            ("compass_calibration.map_offset", self.compass_calibration.map_offset),
+        ];
+        for (key, v) in finite {
+            if !v.is_finite() {
+                return Err(invalid(key, &format!("expected a finite number, found {v}")));
+            }
+        }
+        ekf_core::WheelNoise::new(l.wheel_noise.delta, l.wheel_noise.floor).map_err(|e| invalid("localizer.wheel_noise", &e.to_string()))?;
+        l.odometry_noise.validated().map_err(|e| invalid("localizer.odometry_noise", &e.to_string()))?;
+        l.extraction.clone().validated().map_err(|e| invalid("localizer.extraction", &e.to_string()))?;
+        Ok(self)
+    }
+}
