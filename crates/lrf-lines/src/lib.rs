@@ -9,8 +9,12 @@
 
 extern crate alloc;
 
+pub mod map;
+pub mod matching;
 pub mod observed;
 pub mod scan;
 
+pub use map::{LineMap, MapBuilder, MapBuilderParams, MapFormatError, MapSegment};
+pub use matching::{LineMatch, MatchParams, MatchResult, Matcher, RejectReason, Rejection};
 pub use observed::ObservedLine;
 pub use scan::LaserScan;
