@@ -9,8 +9,13 @@
 
 extern crate alloc;
 
+pub mod extract;
 pub mod observed;
+pub mod point3d;
 pub mod scan;
 
+pub use extract::{ExtractionError, ExtractionParams, LineExtractor};
 pub use observed::ObservedLine;
+pub use point3d::pitched_scan_point;
 pub use scan::LaserScan;
+pub use scan::ScanError;
