@@ -9,12 +9,17 @@
 
 extern crate alloc;
 
+pub mod extract;
 pub mod map;
 pub mod matching;
 pub mod observed;
+pub mod point3d;
 pub mod scan;
 
+pub use extract::{ExtractionError, ExtractionParams, LineExtractor};
 pub use map::{LineMap, MapBuilder, MapBuilderParams, MapFormatError, MapSegment};
 pub use matching::{LineMatch, MatchParams, MatchResult, Matcher, RejectReason, Rejection};
 pub use observed::ObservedLine;
+pub use point3d::pitched_scan_point;
 pub use scan::LaserScan;
+pub use scan::ScanError;
