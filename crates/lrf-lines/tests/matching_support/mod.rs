@@ -112,3 +112,46 @@ pub fn map_of(walls: &[Wall]) -> lrf_lines::LineMap {
             .collect(),
     )
 }
+
+/// A laser scan ray-cast against `walls` from `sensor` (world pose of the laser):
+/// `beams` beams from `angle_min` with step `increment`, ranges with Gaussian noise
+/// `sigma` (m) if `rng` is given; beams that hit nothing within `range_max` read
+/// `range_max` (invalid).
+pub fn ray_cast(
+    walls: &[Wall],
+    sensor: &Pose2<f64>,
+    angle_min: f64,
+    increment: f64,
+    beams: usize,
+    range_max: f64,
+    sigma: f64,
+    mut rng: Option<&mut Rng>,
+) -> Vec<f32> {
+    (0..beams)
+        .map(|i| {
+            let phi = sensor.theta + angle_min + i as f64 * increment;
+            let d = nalgebra::Vector2::new(phi.cos(), phi.sin());
+            let o = Point2::new(sensor.x, sensor.y);
+            let mut best = range_max;
+            for (p, q) in walls {
+                let e = q - p;
+                let denom = d.x * e.y - d.y * e.x;
+                if denom.abs() < 1e-12 {
+                    continue;
+                }
+                let w = p - o;
+                let t = (w.x * e.y - w.y * e.x) / denom;
+                let u = (w.x * d.y - w.y * d.x) / denom;
+                if t > 0.0 && (0.0..=1.0).contains(&u) {
+                    best = best.min(t);
+                }
+            }
+            if best < range_max {
+                if let Some(rng) = rng.as_deref_mut() {
+                    best += sigma * rng.normal();
+                }
+            }
+            best as f32
+        })
+        .collect()
+}
