@@ -3,7 +3,7 @@
 //! 721-beam scan ray-cast from the true pose.
 #![allow(dead_code)] // each test crate uses a different part
 
-use crate::matching_support::{ray_cast, rect_room, Rng, Wall};
+use crate::matching_support::{ray_cast, rect_room, Beams, Rng, Wall};
 use ekf_core::{DiffDrive, Pose2, WheelSpeeds};
 use lrf_lines::LaserScan;
 use std::f64::consts::{FRAC_PI_2, PI};
@@ -62,16 +62,13 @@ pub fn measured(true_speeds: &WheelSpeeds<f64>, rng: &mut Rng) -> WheelSpeeds<f6
 
 /// The ranges of a scan from the true robot pose, with 1 cm range noise.
 pub fn ranges(truth: &Pose2<f64>, walls: &[Wall], rng: &mut Rng) -> Vec<f32> {
-    ray_cast(
-        walls,
-        &truth.compose(&mount()),
-        0.0,
-        INCREMENT,
-        BEAMS,
-        RANGE_MAX,
-        0.01,
-        Some(rng),
-    )
+    let beams = Beams {
+        angle_min: 0.0,
+        increment: INCREMENT,
+        count: BEAMS,
+        range_max: RANGE_MAX,
+    };
+    ray_cast(walls, &truth.compose(&mount()), &beams, 0.01, Some(rng))
 }
 
 /// The scan header for `ranges`.

@@ -113,23 +113,32 @@ pub fn map_of(walls: &[Wall]) -> lrf_lines::LineMap {
     )
 }
 
-/// A laser scan ray-cast against `walls` from `sensor` (world pose of the laser):
-/// `beams` beams from `angle_min` with step `increment`, ranges with Gaussian noise
-/// `sigma` (m) if `rng` is given; beams that hit nothing within `range_max` read
-/// `range_max` (invalid).
+/// The beam geometry of a simulated scanner.
+#[derive(Debug, Clone, Copy)]
+pub struct Beams {
+    /// Bearing of the first beam in the sensor frame (rad).
+    pub angle_min: f64,
+    /// Step between beams (rad).
+    pub increment: f64,
+    /// Number of beams.
+    pub count: usize,
+    /// Beams that hit nothing within this range read it (invalid).
+    pub range_max: f64,
+}
+
+/// A laser scan ray-cast against `walls` from `sensor` (world pose of the laser), with
+/// Gaussian range noise `sigma` (m) if `rng` is given.
 pub fn ray_cast(
     walls: &[Wall],
     sensor: &Pose2<f64>,
-    angle_min: f64,
-    increment: f64,
-    beams: usize,
-    range_max: f64,
+    beams: &Beams,
     sigma: f64,
     mut rng: Option<&mut Rng>,
 ) -> Vec<f32> {
-    (0..beams)
+    let range_max = beams.range_max;
+    (0..beams.count)
         .map(|i| {
-            let phi = sensor.theta + angle_min + i as f64 * increment;
+            let phi = sensor.theta + beams.angle_min + i as f64 * beams.increment;
             let d = nalgebra::Vector2::new(phi.cos(), phi.sin());
             let o = Point2::new(sensor.x, sensor.y);
             let mut best = range_max;
