@@ -79,6 +79,17 @@ impl Scanner {
         }
     }
 
+    /// `ranges` as a scan of this scanner (range_min 5 cm).
+    pub fn scan<'a>(&self, ranges: &'a [f32]) -> lrf_lines::LaserScan<'a> {
+        lrf_lines::LaserScan {
+            angle_min: self.angle_min,
+            angle_increment: self.angle_increment,
+            range_min: 0.05,
+            range_max: self.range_max,
+            ranges,
+        }
+    }
+
     /// The bearing of beam `i`.
     pub fn angle(&self, i: usize) -> f64 {
         self.angle_min + i as f64 * self.angle_increment
