@@ -27,25 +27,26 @@ fn ranges() -> impl Strategy<Value = (f64, f64, Vec<f32>)> {
         ],
         0..400,
     );
-    (header, lines, junk).prop_map(
-        |((angle_min, inc), lines, junk): ((f64, f64), Vec<(f64, f64)>, Vec<Option<f32>>)| {
-            let n = junk.len();
-            let ranges = junk
-                .iter()
-                .enumerate()
-                .map(|(i, j)| {
-                    j.unwrap_or_else(|| {
-                        // Beam i sees line k = i·(number of lines)/n at r / cos(φ − ψ)
-                        // (negative behind the sensor: one more kind of junk).
-                        let (r, psi) = lines[i * lines.len() / n.max(1)];
-                        let phi = angle_min + i as f64 * inc;
-                        (r / (phi - psi).cos()) as f32
-                    })
-                })
-                .collect();
-            (angle_min, inc, ranges)
-        },
-    )
+    (header, lines, junk).prop_map(|((angle_min, inc), lines, junk)| {
+        let ranges = scan_ranges(angle_min, inc, &lines, &junk);
+        (angle_min, inc, ranges)
+    })
+}
+
+/// Beam i reads `junk[i]` if set, else sees line `k = i·lines.len()/n` at `r / cos(φ − ψ)`
+/// (negative behind the sensor: one more kind of junk).
+fn scan_ranges(angle_min: f64, inc: f64, lines: &[(f64, f64)], junk: &[Option<f32>]) -> Vec<f32> {
+    let n = junk.len().max(1);
+    junk.iter()
+        .enumerate()
+        .map(|(i, j)| {
+            j.unwrap_or_else(|| {
+                let (r, psi) = lines[i * lines.len() / n];
+                let phi = angle_min + i as f64 * inc;
+                (r / (phi - psi).cos()) as f32
+            })
+        })
+        .collect()
 }
 
 fn params() -> impl Strategy<Value = ExtractionParams> {
