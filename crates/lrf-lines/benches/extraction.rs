@@ -16,7 +16,14 @@ fn extraction(c: &mut Criterion) {
     for (beams, step_deg) in [(361, 0.5_f64), (721, 0.25)] {
         let scanner = Scanner::new(180_f64.to_radians(), step_deg.to_radians());
         assert_eq!(scanner.beams, beams);
-        let ranges = simulate(&room.walls, &room.pose, &scanner, 0.01, 0.0, &mut Rng::new(7));
+        let ranges = simulate(
+            &room.walls,
+            &room.pose,
+            &scanner,
+            0.01,
+            0.0,
+            &mut Rng::new(7),
+        );
         let scan = scanner.scan(&ranges);
         let mut extractor = LineExtractor::new(ExtractionParams::default()).unwrap();
         let mut lines = Vec::new();
