@@ -1,7 +1,7 @@
 //! The [`LineExtractor`]: parameters plus the scratch buffers the pipeline reuses from
 //! scan to scan.
 
-use super::fit::{fit_line, PointNoise};
+use super::fit::{fit_trimmed, PointNoise};
 use super::merge::{merge_collinear, Candidate, MergeRule};
 use super::points::{collect, BeamTable, Run, ScanPoint};
 use super::split::split_runs;
@@ -107,9 +107,10 @@ impl LineExtractor {
         Ok(())
     }
 
-    /// Fits every segment long enough, moving its points to the front of the point
-    /// buffer first so the kept segments tile it without holes (a merge then refits one
-    /// contiguous range, never the dropped clutter between two pieces).
+    /// Fits every segment long enough (trimming outlying end points), and moves the
+    /// fitted points to the front of the point buffer so the kept segments tile it without
+    /// holes: a merge then refits one contiguous range, never the dropped clutter between
+    /// two pieces. Compaction writes at or before the segment being read (`copy_within`).
     fn fit_segments(&mut self) {
         self.candidates.clear();
         let mut write = 0;
@@ -123,19 +124,18 @@ impl LineExtractor {
             if libm::hypot(last.x - first.x, last.y - first.y) < self.params.min_length {
                 continue;
             }
-            let support = write..write + seg.len();
-            self.points.copy_within(seg.clone(), write);
-            write = support.end;
-            if let Some(fit) = self
+            let Some((kept, fit)) = self
                 .points
-                .get(support.clone())
-                .and_then(|p| fit_line(p, &self.merge_rule.noise))
-            {
-                self.candidates.push(Candidate { support, fit });
-            } else {
-                // Keep the buffer hole-free: an unfittable segment gives its slots back.
-                write = support.start;
-            }
+                .get(seg.clone())
+                .and_then(|p| fit_trimmed(p, &self.merge_rule.noise, self.params.min_points))
+            else {
+                continue;
+            };
+            let support = write..write + kept.len();
+            self.points
+                .copy_within(seg.start + kept.start..seg.start + kept.end, write);
+            write = support.end;
+            self.candidates.push(Candidate { support, fit });
         }
         self.points.truncate(write);
     }

@@ -2,18 +2,25 @@
 //! Roumeliotis, Burdick, ICRA 2003) and its covariance, the inverse Fisher information.
 
 use super::points::ScanPoint;
+use core::ops::Range;
 use ekf_core::wrap_angle;
 use nalgebra::Matrix2;
 
 /// Gauss-Newton iterations at most; the total-least-squares start is already close, so
 /// two or three are usual.
 const MAX_ITERATIONS: usize = 6;
-/// Converged when the step is below 10⁻³ of its own standard deviation:
-/// `δᵀ J δ < 10⁻⁶`.
-const STEP_TOLERANCE: f64 = 1e-6;
+/// Converged when the step is below a tenth of its own standard deviation:
+/// `δᵀ J δ < 10⁻²`. The remaining error is then a small fraction of σ, and each pass
+/// over the points is the main cost of extraction.
+const STEP_TOLERANCE: f64 = 1e-2;
 /// A point's normal variance is floored at this fraction of σ_ρ², so a beam exactly
 /// parallel to the line (cos(φ−ψ) = 0) with σ_φ = 0 cannot get an infinite weight.
 const VARIANCE_FLOOR: f64 = 1e-6;
+
+/// End points farther than this many of their own σ from the fitted line are trimmed.
+const TRIM_SIGMAS: f64 = 3.0;
+/// Trim-and-refit rounds at most.
+const MAX_TRIM_ROUNDS: usize = 6;
 
 /// Per-point noise: σ_ρ² (m²) and σ_φ² (rad²).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -48,19 +55,19 @@ pub(crate) struct LineFit {
 /// points, or non-finite sums).
 pub(crate) fn fit_line(points: &[ScanPoint], noise: &PointNoise) -> Option<LineFit> {
     let (mut r, mut psi) = total_least_squares(points)?;
-    let mut info = fisher_information(points, noise, r, psi);
+    let mut covariance = Matrix2::zeros();
     for _ in 0..MAX_ITERATIONS {
-        let (j, b) = info;
-        let inverse = invert_symmetric(&j)?;
-        let step = -(inverse * b);
+        let (j, b) = fisher_information(points, noise, r, psi);
+        covariance = invert_symmetric(&j)?;
+        let step = -(covariance * b);
         r += step.x;
         psi += step.y;
-        info = fisher_information(points, noise, r, psi);
+        // The covariance stays the one at the point before this last, tiny step: the
+        // information changes by a negligible amount over a tenth of a σ.
         if (step.transpose() * j * step).x < STEP_TOLERANCE {
             break;
         }
     }
-    let mut covariance = invert_symmetric(&info.0)?;
     if r < 0.0 {
         // (r, ψ) → (−r, ψ + π) is the same line; its Jacobian diag(−1, 1) flips the
         // sign of the r–ψ covariance.
@@ -71,6 +78,64 @@ pub(crate) fn fit_line(points: &[ScanPoint], noise: &PointNoise) -> Option<LineF
     }
     let psi = wrap_angle(psi);
     (r.is_finite() && psi.is_finite()).then_some(LineFit { r, psi, covariance })
+}
+
+/// [`fit_line`], then trims the run of end points, at the worse end, whose normal
+/// distance exceeds 3σ of their own `var(d_i)` and refits, until both ends are inliers
+/// (a few rounds at most). This
+/// removes the points of the neighbouring wall that a split near a corner leaves at the
+/// end of a segment (the split point, the farthest from the chord, is only near the
+/// corner when the noise allows). Returns the kept sub-range of `points` and its fit, or
+/// `None` if fewer than `min_points` remain.
+pub(crate) fn fit_trimmed(
+    points: &[ScanPoint],
+    noise: &PointNoise,
+    min_points: usize,
+) -> Option<(Range<usize>, LineFit)> {
+    let mut range = 0..points.len();
+    for _ in 0..MAX_TRIM_ROUNDS {
+        let kept = points.get(range.clone())?;
+        let fit = fit_line(kept, noise)?;
+        let normal = libm::sincos(fit.psi);
+        let residual = |p: &ScanPoint| normalized_residual(p, &fit, normal, noise);
+        let (first, last) = (kept.first()?, kept.last()?);
+        // Trim only the worse end: a fit pulled by outliers at one end can make the good
+        // points at the other end look bad too.
+        let trim_head = residual(first) >= residual(last);
+        let outlier = |p: &&ScanPoint| residual(p) > TRIM_SIGMAS;
+        let trimmed = if trim_head {
+            kept.iter().take_while(outlier).count()
+        } else {
+            kept.iter().rev().take_while(outlier).count()
+        };
+        if trimmed == 0 {
+            return Some((range, fit));
+        }
+        range = if trim_head {
+            range.start + trimmed..range.end
+        } else {
+            range.start..range.end - trimmed
+        };
+        if range.len() < min_points {
+            return None;
+        }
+    }
+    let fit = fit_line(points.get(range.clone())?, noise)?;
+    Some((range, fit))
+}
+
+/// `|d_i| / √var(d_i)`: the point's normal distance from the line in units of its own
+/// standard deviation (same `var(d_i)` as the fit); `(s_psi, c_psi)` = (sin ψ, cos ψ).
+fn normalized_residual(
+    p: &ScanPoint,
+    fit: &LineFit,
+    (s_psi, c_psi): (f64, f64),
+    noise: &PointNoise,
+) -> f64 {
+    let cos_d = p.cos * c_psi + p.sin * s_psi;
+    let g2 = p.range * (p.sin * c_psi - p.cos * s_psi);
+    let var = noise.range_var * cos_d * cos_d + noise.bearing_var * g2 * g2;
+    libm::fabs(p.range * cos_d - fit.r) / libm::sqrt(var.max(VARIANCE_FLOOR * noise.range_var))
 }
 
 /// The unweighted total-least-squares line through the centroid: with the centred
@@ -94,7 +159,8 @@ fn total_least_squares(points: &[ScanPoint]) -> Option<(f64, f64)> {
     let n = points.len() as f64;
     let (mx, my) = (sx / n, sy / n);
     let (cxx, cyy, cxy) = (sxx - n * mx * mx, syy - n * my * my, sxy - n * mx * my);
-    if !(cxx + cyy > 0.0) {
+    let spread = cxx + cyy;
+    if spread.is_nan() || spread <= 0.0 {
         return None;
     }
     let psi = 0.5 * libm::atan2(-2.0 * cxy, cyy - cxx);
@@ -220,6 +286,25 @@ mod tests {
         let pts = on_line(2.0, 0.0, (0..30).map(|i| -0.5 - 0.01 * i as f64));
         let c = fit_line(&pts, &NOISE).unwrap().covariance;
         assert!(c[(0, 1)] < 0.0, "{c}");
+    }
+
+    #[test]
+    fn trimming_drops_the_neighbouring_wall_at_a_corner() {
+        // 40 points on x = 2, then 6 points 5 cm apart turning onto the wall y = 1.2.
+        let mut pts = on_line(2.0, 0.0, (0..40).map(|i| -0.3 + 0.02 * i as f64));
+        pts.extend((1..=6).map(|i| {
+            let (x, y) = (2.0 - 0.05 * i as f64, 1.2);
+            polar(x.hypot(y), y.atan2(x))
+        }));
+        let (range, fit) = fit_trimmed(&pts, &NOISE, 5).unwrap();
+        assert_eq!(range, 0..40);
+        assert!(
+            (fit.r - 2.0).abs() < 1e-9 && fit.psi.abs() < 1e-9,
+            "{fit:?}"
+        );
+        // Nothing to trim on a clean segment; too few left is None.
+        assert_eq!(fit_trimmed(&pts[..40], &NOISE, 5).unwrap().0, 0..40);
+        assert_eq!(fit_trimmed(&pts, &NOISE, 41), None);
     }
 
     #[test]

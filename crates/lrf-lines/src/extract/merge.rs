@@ -86,7 +86,7 @@ pub(crate) fn mahalanobis_squared(a: &LineFit, b: &LineFit) -> Option<f64> {
     }
     let (s11, s12, s22) = (sum[(0, 0)], sum[(0, 1)], sum[(1, 1)]);
     let det = s11 * s22 - s12 * s12;
-    if !(det > 0.0) {
+    if det.is_nan() || det <= 0.0 {
         return None;
     }
     let d2 =

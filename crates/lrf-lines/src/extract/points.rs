@@ -61,32 +61,34 @@ pub(crate) fn collect(
 ) {
     points.clear();
     runs.clear();
+    points.reserve(scan.ranges.len());
     let max_gap_sq = max_gap * max_gap;
     let mut run_start = 0;
-    let mut previous_valid = false;
+    // The previous beam's point, if that beam was valid.
+    let mut previous: Option<(f64, f64)> = None;
     for (&r, &(c, s)) in scan.ranges.iter().zip(&table.cos_sin) {
         if !scan.is_valid(r) {
-            previous_valid = false;
+            previous = None;
             continue;
         }
         let range = f64::from(r);
-        let p = ScanPoint {
-            x: range * c,
-            y: range * s,
-            range,
-            cos: c,
-            sin: s,
-        };
-        let joins = previous_valid
-            && points
-                .last()
-                .is_some_and(|q| squared_distance(&p, q) <= max_gap_sq);
+        let (x, y) = (range * c, range * s);
+        let joins = previous.is_some_and(|(px, py)| {
+            let (dx, dy) = (x - px, y - py);
+            dx * dx + dy * dy <= max_gap_sq
+        });
         if !joins {
             close_run(runs, run_start, points.len());
             run_start = points.len();
         }
-        points.push(p);
-        previous_valid = true;
+        points.push(ScanPoint {
+            x,
+            y,
+            range,
+            cos: c,
+            sin: s,
+        });
+        previous = Some((x, y));
     }
     close_run(runs, run_start, points.len());
 }
