@@ -12,7 +12,7 @@ use nalgebra::Point2;
 use serde::{Deserialize, Serialize};
 
 /// Matching parameters.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct MatchParams {
     /// Probability of the chi-square gate on the 2-D line innovation: a pair is a

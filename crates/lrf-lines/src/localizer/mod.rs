@@ -66,6 +66,46 @@ pub struct ScanReport {
 /// For independent line noise, sequential fusion equals the paper's stacked update
 /// (eq. 16) up to re-linearisation, and a line that no longer fits after the others have
 /// corrected the pose is not forced in.
+///
+/// # Example
+///
+/// ```
+/// use ekf_core::{Pose2, WheelSpeeds};
+/// use lrf_lines::{LaserScan, LineMap, Localizer, LocalizerConfig};
+/// use nalgebra::Matrix3;
+///
+/// let map = LineMap::from_json(
+///     r#"{"format": "ekf-loc line map", "version": 1,
+///         "segments": [{"start": [3, -2], "end": [3, 2]}, {"start": [-1, 1.5], "end": [3, 1.5]}]}"#,
+/// )?;
+/// let config = LocalizerConfig::default(); // the paper's robot, laser at the origin
+/// let mut localizer = Localizer::new(config, Pose2::identity(), Matrix3::identity() * 1e-4, map)?;
+///
+/// localizer.predict_wheels(&WheelSpeeds::new(2.0, 2.0, 0.1)?)?;
+/// let compass = localizer.update_compass(0.01)?;
+/// assert!(compass.accepted);
+///
+/// // A 181-beam scan (1° steps, −90°…90°) of the wall 3 m ahead, 2.99 m from the laser.
+/// let ranges: Vec<f32> = (0..181)
+///     .map(|i| {
+///         let bearing = (i as f64 - 90.0).to_radians();
+///         let r = 2.99 / bearing.cos();
+///         if r.abs() * bearing.sin().abs() < 1.4 { r as f32 } else { f32::INFINITY }
+///     })
+///     .collect();
+/// let scan = LaserScan {
+///     angle_min: -core::f64::consts::FRAC_PI_2,
+///     angle_increment: 1.0_f64.to_radians(),
+///     range_min: 0.05,
+///     range_max: 8.0,
+///     ranges: &ranges,
+/// };
+/// let report = localizer.update_scan(&scan)?;
+/// assert_eq!((report.extracted, report.matched, report.fused), (1, 1, 1));
+/// assert_eq!(localizer.last_fusions()[0].map, 0);
+/// assert!((localizer.pose().x - 0.01).abs() < 0.005);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 #[derive(Debug, Clone)]
 pub struct Localizer {
     config: LocalizerConfig,
@@ -106,7 +146,7 @@ impl Localizer {
         Compass::new(0.0, config.compass.variance).map_err(cfg("compass"))?;
         let compass_gate = ChiSquareGate::from_probability(config.compass.gate_probability, 1)
             .map_err(cfg("compass"))?;
-        let matcher = Matcher::new(config.matching.clone()).map_err(cfg("matching"))?;
+        let matcher = Matcher::new(config.matching).map_err(cfg("matching"))?;
         let extractor = LineExtractor::new(config.extraction)?;
         let ekf = Ekf::new(initial_pose, initial_covariance).map_err(LocalizerError::Filter)?;
         Ok(Self {

@@ -10,7 +10,7 @@ use nalgebra::{Matrix2, Point2, Vector2};
 use serde::{Deserialize, Serialize};
 
 /// How [`MapBuilder`] decides that two sightings are the same wall.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct MapBuilderParams {
     /// Probability of the chi-square test (2 dof) on the difference of `(ρ, β)`.

@@ -132,7 +132,7 @@ impl LineMap {
     where
         I: IntoIterator<Item = (&'a [ObservedLine], Pose2<f64>)>,
     {
-        let mut builder = MapBuilder::new(params.clone())?;
+        let mut builder = MapBuilder::new(*params)?;
         for (lines, pose) in scans {
             builder.add_scan(lines, &pose)?;
         }
