@@ -2,7 +2,7 @@
 //! innovation space (ekf-core's laser-line model), a chi-square gate and a segment-overlap
 //! check, with each map wall used at most once per scan.
 
-use crate::map::{interval_along, LineMap, MapSegment};
+use crate::map::{LineMap, MapSegment};
 use crate::ObservedLine;
 use alloc::vec::Vec;
 use core::f64::consts::{PI, TAU};
@@ -125,6 +125,20 @@ struct WallCache {
     extent: (f64, f64),
 }
 
+impl WallCache {
+    fn new(segment: &MapSegment) -> Self {
+        let (sin, cos) = (libm::sin(segment.line.beta), libm::cos(segment.line.beta));
+        // Coordinates along the direction d = (−sin β, cos β).
+        let along = |p: &Point2<f64>| -p.x * sin + p.y * cos;
+        let (t0, t1) = (along(&segment.start), along(&segment.end));
+        Self {
+            cos,
+            sin,
+            extent: (t0.min(t1), t0.max(t1)),
+        }
+    }
+}
+
 /// The result of matching one scan, reused across scans: [`Matcher::match_lines`] clears
 /// and refills its buffers, so once they have grown to the largest scan and map, matching
 /// does not allocate.
@@ -245,14 +259,7 @@ impl Matcher {
         out: &mut MatchResult,
     ) {
         out.clear(observed.len(), map.segments.len());
-        for segment in &map.segments {
-            let (sin, cos) = (libm::sin(segment.line.beta), libm::cos(segment.line.beta));
-            out.walls.push(WallCache {
-                cos,
-                sin,
-                extent: interval_along(&segment.line, &segment.start, &segment.end),
-            });
-        }
+        out.walls.extend(map.segments.iter().map(WallCache::new));
         for (i, line) in observed.iter().enumerate() {
             if let Err(e) = validate_observed(line) {
                 out.status[i] = Status::Unmatched(RejectReason::InvalidLine(e));
