@@ -9,8 +9,21 @@
 
 extern crate alloc;
 
+pub mod extract;
+pub mod localizer;
+pub mod map;
+pub mod matching;
 pub mod observed;
+pub mod point3d;
 pub mod scan;
 
+pub use extract::{ExtractionError, ExtractionParams, LineExtractor};
+pub use localizer::{
+    CompassConfig, LineFusion, Localizer, LocalizerConfig, LocalizerError, ScanReport,
+};
+pub use map::{LineMap, MapBuilder, MapBuilderParams, MapFormatError, MapSegment};
+pub use matching::{LineMatch, MatchParams, MatchResult, Matcher, RejectReason, Rejection};
 pub use observed::ObservedLine;
+pub use point3d::pitched_scan_point;
 pub use scan::LaserScan;
+pub use scan::ScanError;

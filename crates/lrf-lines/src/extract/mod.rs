@@ -1,0 +1,21 @@
+//! Line extraction from one laser scan: split-and-merge over the scan's points, a
+//! weighted least-squares fit with an honest 2×2 covariance per line, and merging of
+//! adjacent collinear lines by a chi-square test (DESIGN.md §4).
+//!
+//! The pipeline, one private module per step: `points` (valid beams → points, runs at
+//! invalid beams and gaps) → `split` (iterative end-point fit) → `fit` (weighted fit with
+//! end trimming, Pfister et al. 2003) → `merge` (collinear merging); `extractor` drives
+//! them with reusable buffers, so steady-state extraction does not allocate. The public
+//! surface is [`LineExtractor`], [`ExtractionParams`] and [`ExtractionError`].
+
+mod error;
+mod extractor;
+mod fit;
+mod merge;
+mod params;
+mod points;
+mod split;
+
+pub use error::ExtractionError;
+pub use extractor::LineExtractor;
+pub use params::ExtractionParams;

@@ -1,0 +1,132 @@
+//! Polar → Cartesian conversion of the valid beams, with the beams' cos/sin cached across
+//! scans of the same geometry, and the cut of the points into runs at invalid beams and
+//! range gaps.
+
+use crate::LaserScan;
+use alloc::vec::Vec;
+
+/// A valid reading as a point: `(x, y) = ρ (cos φ, sin φ)` in the sensor frame, keeping
+/// `ρ` and `(cos φ, sin φ)` for the weighted fit.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct ScanPoint {
+    /// x = ρ cos φ (m).
+    pub x: f64,
+    /// y = ρ sin φ (m).
+    pub y: f64,
+    /// Range ρ (m).
+    pub range: f64,
+    /// cos φ of the beam.
+    pub cos: f64,
+    /// sin φ of the beam.
+    pub sin: f64,
+}
+
+/// cos/sin of every beam angle `φ_i = angle_min + i·angle_increment`, recomputed only
+/// when the scan geometry (angle_min, angle_increment, number of beams) changes.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct BeamTable {
+    key: Option<(u64, u64)>,
+    cos_sin: Vec<(f64, f64)>,
+}
+
+impl BeamTable {
+    /// Makes the table match `scan`'s beam geometry.
+    pub fn update(&mut self, scan: &LaserScan<'_>) {
+        let key = (scan.angle_min.to_bits(), scan.angle_increment.to_bits());
+        if self.key == Some(key) && self.cos_sin.len() == scan.ranges.len() {
+            return;
+        }
+        self.cos_sin.clear();
+        self.cos_sin.extend((0..scan.ranges.len()).map(|i| {
+            let (s, c) = libm::sincos(scan.beam_angle(i));
+            (c, s)
+        }));
+        self.key = Some(key);
+    }
+}
+
+/// A maximal stretch of consecutive valid beams whose neighbouring points are at most
+/// `max_gap` apart: `points[start..end]`.
+pub(crate) type Run = core::ops::Range<usize>;
+
+/// Clears `points` and `runs`, then converts the valid readings of `scan` (in beam order)
+/// to points and cuts them into runs at every invalid beam and wherever consecutive points
+/// are more than `max_gap` apart. `table` must be up to date for `scan`.
+pub(crate) fn collect(
+    scan: &LaserScan<'_>,
+    table: &BeamTable,
+    max_gap: f64,
+    points: &mut Vec<ScanPoint>,
+    runs: &mut Vec<Run>,
+) {
+    points.clear();
+    runs.clear();
+    points.reserve(scan.ranges.len());
+    let max_gap_sq = max_gap * max_gap;
+    let mut run_start = 0;
+    // The previous beam's point, if that beam was valid.
+    let mut previous: Option<(f64, f64)> = None;
+    for (&r, &(c, s)) in scan.ranges.iter().zip(&table.cos_sin) {
+        if !scan.is_valid(r) {
+            previous = None;
+            continue;
+        }
+        let range = f64::from(r);
+        let (x, y) = (range * c, range * s);
+        let joins = previous.is_some_and(|(px, py)| {
+            let (dx, dy) = (x - px, y - py);
+            dx * dx + dy * dy <= max_gap_sq
+        });
+        if !joins {
+            close_run(runs, run_start, points.len());
+            run_start = points.len();
+        }
+        points.push(ScanPoint {
+            x,
+            y,
+            range,
+            cos: c,
+            sin: s,
+        });
+        previous = Some((x, y));
+    }
+    close_run(runs, run_start, points.len());
+}
+
+/// Squared Euclidean distance between two points (m²).
+#[inline]
+pub(crate) fn squared_distance(a: &ScanPoint, b: &ScanPoint) -> f64 {
+    let (dx, dy) = (a.x - b.x, a.y - b.y);
+    dx * dx + dy * dy
+}
+
+fn close_run(runs: &mut Vec<Run>, start: usize, end: usize) {
+    if end > start {
+        runs.push(start..end);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn runs_break_at_invalid_beams_and_gaps() {
+        let ranges = [1.0, 1.0, f32::NAN, 1.0, 1.0, 3.0, 3.0, 0.0];
+        let scan = LaserScan {
+            angle_min: 0.0,
+            angle_increment: 0.01,
+            range_min: 0.05,
+            range_max: 10.0,
+            ranges: &ranges,
+        };
+        let mut table = BeamTable::default();
+        table.update(&scan);
+        let (mut points, mut runs) = (Vec::new(), Vec::new());
+        collect(&scan, &table, 0.3, &mut points, &mut runs);
+        assert_eq!(points.len(), 6);
+        assert_eq!(runs, [0..2, 2..4, 4..6]);
+        assert!((points[5].x - 3.0 * 0.06_f64.cos()).abs() < 1e-6);
+        assert!((points[5].y - 3.0 * 0.06_f64.sin()).abs() < 1e-6);
+    }
+}

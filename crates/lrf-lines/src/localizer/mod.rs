@@ -1,0 +1,326 @@
+//! The `Localizer` facade for embedders: one object that runs the whole localization
+//! step — wheel or odometry prediction, compass update, and scan → extract → match →
+//! update — over `ekf-core`, with per-step diagnostics and no printing.
+
+mod config;
+mod error;
+
+pub use config::{CompassConfig, LocalizerConfig};
+pub use error::LocalizerError;
+
+use crate::{LaserScan, LineExtractor, LineMap, MatchResult, Matcher, ObservedLine};
+use alloc::vec::Vec;
+use ekf_core::{
+    ChiSquareGate, Compass, DiffDrive, Ekf, LaserLine, Motion, Pose2, UpdateOutcome, WheelNoise,
+    WheelSpeeds,
+};
+use nalgebra::Matrix3;
+
+/// What happened to one matched line during the sequential update.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LineFusion {
+    /// Index of the observed line in [`Localizer::last_lines`].
+    pub observed: usize,
+    /// Index of the wall in [`Localizer::map`].
+    pub map: usize,
+    /// NIS of the line at the state it was fused into (after the lines before it).
+    pub nis: f64,
+    /// `true` if it passed the gate again and was fused.
+    pub accepted: bool,
+}
+
+/// Counts for one [`Localizer::update_scan`]; the lines, matches and fusions themselves
+/// are [`Localizer::last_lines`], [`Localizer::last_matches`] and
+/// [`Localizer::last_fusions`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct ScanReport {
+    /// Lines extracted from the scan.
+    pub extracted: usize,
+    /// Lines associated with a wall at the predicted state.
+    pub matched: usize,
+    /// Lines not associated (outside the gate, no overlap, wall taken, invalid).
+    pub rejected: usize,
+    /// Matched lines fused into the state.
+    pub fused: usize,
+    /// Matched lines that failed the gate when re-evaluated at the updated state.
+    pub refused: usize,
+    /// `true` if this scan's lines became the map (see [`Localizer::with_first_scan_map`]);
+    /// nothing is fused then.
+    pub map_built: bool,
+}
+
+/// The localization step for one robot: an [`Ekf`] plus a line map, a [`LineExtractor`],
+/// a [`Matcher`] and the buffers they reuse, so that after the first scans no step
+/// allocates.
+///
+/// A scan update ([`update_scan`](Self::update_scan)) does exactly this:
+/// 1. extract the scan's lines (sensor frame);
+/// 2. match them to the map at the predicted state `(x⁻, P⁻)` (see [`Matcher`]: 2-dof
+///    chi-square gate on the line innovation, segment overlap, each wall at most once,
+///    conflicts resolved by increasing NIS);
+/// 3. fuse the matches one at a time in increasing order of their NIS at `x⁻`: each is
+///    re-linearised at the current state (after the lines fused before it), gated again
+///    with the same threshold, and fused with a Joseph-form update if it passes;
+///    otherwise it is counted as refused and the state is left as it was.
+///
+/// For independent line noise, sequential fusion equals the paper's stacked update
+/// (eq. 16) up to re-linearisation, and a line that no longer fits after the others have
+/// corrected the pose is not forced in.
+///
+/// # Example
+///
+/// ```
+/// use ekf_core::{Pose2, WheelSpeeds};
+/// use lrf_lines::{LaserScan, LineMap, Localizer, LocalizerConfig};
+/// use nalgebra::Matrix3;
+///
+/// let map = LineMap::from_json(
+///     r#"{"format": "ekf-loc line map", "version": 1,
+///         "segments": [{"start": [3, -2], "end": [3, 2]}, {"start": [-1, 1.5], "end": [3, 1.5]}]}"#,
+/// )?;
+/// let config = LocalizerConfig::default(); // the paper's robot, laser at the origin
+/// let mut localizer = Localizer::new(config, Pose2::identity(), Matrix3::identity() * 1e-4, map)?;
+///
+/// localizer.predict_wheels(&WheelSpeeds::new(2.0, 2.0, 0.1)?)?;
+/// let compass = localizer.update_compass(0.01)?;
+/// assert!(compass.accepted);
+///
+/// // A 181-beam scan (1° steps, −90°…90°) of the wall 3 m ahead, 2.99 m from the laser.
+/// let ranges: Vec<f32> = (0..181)
+///     .map(|i| {
+///         let bearing = (i as f64 - 90.0).to_radians();
+///         let r = 2.99 / bearing.cos();
+///         if r.abs() * bearing.sin().abs() < 1.4 { r as f32 } else { f32::INFINITY }
+///     })
+///     .collect();
+/// let scan = LaserScan {
+///     angle_min: -core::f64::consts::FRAC_PI_2,
+///     angle_increment: 1.0_f64.to_radians(),
+///     range_min: 0.05,
+///     range_max: 8.0,
+///     ranges: &ranges,
+/// };
+/// let report = localizer.update_scan(&scan)?;
+/// assert_eq!((report.extracted, report.matched, report.fused), (1, 1, 1));
+/// assert_eq!(localizer.last_fusions()[0].map, 0);
+/// assert!((localizer.pose().x - 0.01).abs() < 0.005);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+#[derive(Debug, Clone)]
+pub struct Localizer {
+    config: LocalizerConfig,
+    ekf: Ekf<f64>,
+    map: LineMap,
+    build_map_from_next_scan: bool,
+    extractor: LineExtractor,
+    matcher: Matcher,
+    compass_gate: ChiSquareGate<f64>,
+    lines: Vec<ObservedLine>,
+    matches: MatchResult,
+    fusions: Vec<LineFusion>,
+}
+
+impl Localizer {
+    /// A localizer at `initial_pose` with covariance `initial_covariance` (3×3, `(x, y, θ)`)
+    /// and a `map` in the same world frame. Fails, naming the config group and field, if a
+    /// config value is out of range, or if the initial state is not finite or the
+    /// covariance not symmetric positive definite.
+    pub fn new(
+        config: LocalizerConfig,
+        initial_pose: Pose2<f64>,
+        initial_covariance: Matrix3<f64>,
+        map: LineMap,
+    ) -> Result<Self, LocalizerError> {
+        let cfg = |group| move |error| LocalizerError::Config { group, error };
+        DiffDrive::new(config.robot.wheel_radius, config.robot.track).map_err(cfg("robot"))?;
+        WheelNoise::new(config.wheel_noise.delta, config.wheel_noise.floor)
+            .map_err(cfg("wheel_noise"))?;
+        config
+            .odometry_noise
+            .validated()
+            .map_err(cfg("odometry_noise"))?;
+        config
+            .laser_mount
+            .validated("laser mount")
+            .map_err(cfg("laser_mount"))?;
+        Compass::new(0.0, config.compass.variance).map_err(cfg("compass"))?;
+        let compass_gate = ChiSquareGate::from_probability(config.compass.gate_probability, 1)
+            .map_err(cfg("compass"))?;
+        let matcher = Matcher::new(config.matching).map_err(cfg("matching"))?;
+        let extractor = LineExtractor::new(config.extraction)?;
+        let ekf = Ekf::new(initial_pose, initial_covariance).map_err(LocalizerError::Filter)?;
+        Ok(Self {
+            config,
+            ekf,
+            map,
+            build_map_from_next_scan: false,
+            extractor,
+            matcher,
+            compass_gate,
+            lines: Vec::new(),
+            matches: MatchResult::new(),
+            fusions: Vec::new(),
+        })
+    }
+
+    /// The paper's set-up (§III): no map yet; the first scan given to
+    /// [`update_scan`](Self::update_scan) becomes the map, its lines placed in the world
+    /// at the then current pose ⊕ laser mount ([`LineMap::from_scan`]). Later scans are
+    /// matched against it.
+    pub fn with_first_scan_map(
+        config: LocalizerConfig,
+        initial_pose: Pose2<f64>,
+        initial_covariance: Matrix3<f64>,
+    ) -> Result<Self, LocalizerError> {
+        let mut localizer =
+            Self::new(config, initial_pose, initial_covariance, LineMap::default())?;
+        localizer.build_map_from_next_scan = true;
+        Ok(localizer)
+    }
+
+    /// Prediction from wheel speeds (paper eqs. 1–9) with the configured robot and wheel
+    /// noise: `x⁻ = f(x, u)`, `P⁻ = A P Aᵀ + W Q Wᵀ`.
+    pub fn predict_wheels(&mut self, speeds: &WheelSpeeds<f64>) -> Result<(), LocalizerError> {
+        self.ekf
+            .predict_wheels(&self.config.robot, speeds, &self.config.wheel_noise)
+            .map_err(LocalizerError::Filter)
+    }
+
+    /// Prediction from an odometry delta `(Δs, Δθ)` with the configured odometry noise.
+    pub fn predict_odometry(&mut self, motion: &Motion<f64>) -> Result<(), LocalizerError> {
+        self.ekf
+            .predict_odometry(motion, &self.config.odometry_noise)
+            .map_err(LocalizerError::Filter)
+    }
+
+    /// Fuses a compass heading `φ` (rad, map frame; see
+    /// [`ekf_core::heading_from_compass_bearing`] for raw bearings) with the configured
+    /// variance, if its `NIS = wrap(φ − θ)² / (P_θθ + σ²)` passes the 1-dof gate. A
+    /// rejected heading leaves the state unchanged (`accepted == false`).
+    pub fn update_compass(&mut self, heading: f64) -> Result<UpdateOutcome<f64>, LocalizerError> {
+        let compass =
+            Compass::new(heading, self.config.compass.variance).map_err(LocalizerError::Filter)?;
+        self.ekf
+            .update(&compass, Some(&self.compass_gate))
+            .map_err(LocalizerError::Filter)
+    }
+
+    /// One laser step: extract, match at the predicted state, fuse sequentially (see the
+    /// type's documentation). Fails only on an invalid scan header or a non-finite
+    /// result; the state is then as before the call.
+    pub fn update_scan(&mut self, scan: &LaserScan<'_>) -> Result<ScanReport, LocalizerError> {
+        self.fusions.clear();
+        if let Err(e) = self.extractor.extract(scan, &mut self.lines) {
+            self.clear_matches();
+            return Err(e.into());
+        }
+        let mut report = ScanReport {
+            extracted: self.lines.len(),
+            ..ScanReport::default()
+        };
+        let mount = self.config.laser_mount;
+        if self.build_map_from_next_scan {
+            self.map = LineMap::from_scan(&self.lines, &self.sensor_pose())
+                .map_err(LocalizerError::Filter)?;
+            self.build_map_from_next_scan = false;
+            self.clear_matches();
+            report.map_built = true;
+            return Ok(report);
+        }
+        self.matcher
+            .match_lines(&self.lines, &self.map, &self.ekf, &mount, &mut self.matches);
+        report.matched = self.matches.matches().len();
+        report.rejected = self.matches.rejections().len();
+        let before = self.ekf;
+        for m in self.matches.matches() {
+            let (Some(line), Some(wall)) =
+                (self.lines.get(m.observed), self.map.segments.get(m.map))
+            else {
+                continue;
+            };
+            let model = LaserLine {
+                observed: line.line,
+                covariance: line.covariance,
+                map_line: wall.line,
+                mount,
+            };
+            let outcome = match self.ekf.update(&model, Some(self.matcher.gate())) {
+                Ok(outcome) => outcome,
+                Err(e) => {
+                    self.ekf = before;
+                    self.fusions.clear();
+                    return Err(LocalizerError::Filter(e));
+                }
+            };
+            if outcome.accepted {
+                report.fused += 1;
+            } else {
+                report.refused += 1;
+            }
+            self.fusions.push(LineFusion {
+                observed: m.observed,
+                map: m.map,
+                nis: outcome.nis,
+                accepted: outcome.accepted,
+            });
+        }
+        Ok(report)
+    }
+
+    /// Empties the match result (after a scan that was not matched).
+    fn clear_matches(&mut self) {
+        self.matcher.match_lines(
+            &[],
+            &self.map,
+            &self.ekf,
+            &self.config.laser_mount,
+            &mut self.matches,
+        );
+    }
+
+    /// The pose estimate `(x, y, θ)`.
+    pub fn pose(&self) -> Pose2<f64> {
+        self.ekf.pose()
+    }
+
+    /// The covariance `P` of `(x, y, θ)`.
+    pub fn covariance(&self) -> &Matrix3<f64> {
+        self.ekf.covariance()
+    }
+
+    /// The laser's pose in the world: pose ⊕ laser mount. Observed lines and their end
+    /// points map into the world with it.
+    pub fn sensor_pose(&self) -> Pose2<f64> {
+        self.ekf.pose().compose(&self.config.laser_mount)
+    }
+
+    /// The filter itself, for inspection.
+    pub fn ekf(&self) -> &Ekf<f64> {
+        &self.ekf
+    }
+
+    /// The map (empty until the first scan for [`with_first_scan_map`](Self::with_first_scan_map)).
+    pub fn map(&self) -> &LineMap {
+        &self.map
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &LocalizerConfig {
+        &self.config
+    }
+
+    /// The lines extracted from the last scan (sensor frame), indexed as in the matches.
+    pub fn last_lines(&self) -> &[ObservedLine] {
+        &self.lines
+    }
+
+    /// The association of the last scan's lines with the map, at the predicted state.
+    pub fn last_matches(&self) -> &MatchResult {
+        &self.matches
+    }
+
+    /// What the sequential update did with each match of the last scan, in fusion order.
+    pub fn last_fusions(&self) -> &[LineFusion] {
+        &self.fusions
+    }
+}

@@ -1,0 +1,495 @@
+//! Data association: which map wall each observed line is, by the Mahalanobis distance in
+//! innovation space (ekf-core's laser-line model), a chi-square gate and a segment-overlap
+//! check, with each map wall used at most once per scan.
+
+use crate::map::{LineMap, MapSegment};
+use crate::ObservedLine;
+use alloc::vec::Vec;
+use core::f64::consts::{PI, TAU};
+use core::fmt;
+use ekf_core::{angle_diff, ChiSquareGate, Ekf, Error, Innovation, LaserLine, Pose2};
+use nalgebra::Point2;
+use serde::{Deserialize, Serialize};
+
+/// Matching parameters.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct MatchParams {
+    /// Probability of the chi-square gate on the 2-D line innovation: a pair is a
+    /// candidate when `NIS = yᵀ S⁻¹ y ≤ χ²₂⁻¹(p)`. Default 0.99 (threshold 9.21).
+    pub gate_probability: f64,
+    /// Overlap (m) along the map wall that always suffices; see
+    /// [`min_overlap_fraction`](Self::min_overlap_fraction). Default 0.2 m.
+    pub min_overlap: f64,
+    /// The required overlap is `min(min_overlap, min_overlap_fraction · ℓ)`, `ℓ` the
+    /// length of the observed segment projected onto the wall, so a short observed
+    /// segment must lie mostly on the wall and a long one needs `min_overlap`. Default 0.5.
+    pub min_overlap_fraction: f64,
+}
+
+impl Default for MatchParams {
+    fn default() -> Self {
+        Self {
+            gate_probability: 0.99,
+            min_overlap: 0.2,
+            min_overlap_fraction: 0.5,
+        }
+    }
+}
+
+/// An observed line associated with a map wall.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LineMatch {
+    /// Index of the observed line.
+    pub observed: usize,
+    /// Index of the map wall in [`LineMap::segments`].
+    pub map: usize,
+    /// The innovation at the state matching was run at: `y = (r, ψ) − (r̂, ψ̂)` (ψ
+    /// wrapped), its covariance `S = H P Hᵀ + R`, and `NIS = yᵀ S⁻¹ y`.
+    pub innovation: Innovation<f64, 2>,
+    /// Length (m) by which the observed segment, projected into the world at the
+    /// predicted sensor pose, overlaps the wall along the wall's direction.
+    pub overlap: f64,
+}
+
+/// Why an observed line was not matched.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum RejectReason {
+    /// No map wall within the chi-square gate.
+    OutsideGate,
+    /// Some walls passed the gate but none overlapped the observed segment enough;
+    /// `map` is the one with the smallest NIS.
+    NoOverlap {
+        /// The closest wall (by NIS) that passed the gate.
+        map: usize,
+    },
+    /// Every wall that passed both tests was taken by another observed line with a
+    /// smaller NIS; `map` is this line's best wall, `by` the line that took it.
+    MapLineTaken {
+        /// This line's best wall.
+        map: usize,
+        /// The observed line it was assigned to.
+        by: usize,
+    },
+    /// The observed line has a non-finite value or a covariance that is not symmetric
+    /// positive definite.
+    InvalidLine(Error),
+}
+
+impl fmt::Display for RejectReason {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            RejectReason::OutsideGate => f.write_str("outside gate"),
+            RejectReason::NoOverlap { map } => write!(f, "no overlap (closest map line {map})"),
+            RejectReason::MapLineTaken { map, by } => write!(
+                f,
+                "map line {map} already taken by a better match (observed line {by})"
+            ),
+            RejectReason::InvalidLine(e) => write!(f, "invalid line: {e}"),
+        }
+    }
+}
+
+/// An observed line that was not matched, and why.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Rejection {
+    /// Index of the observed line.
+    pub observed: usize,
+    /// Why it was not matched.
+    pub reason: RejectReason,
+}
+
+/// The sort key of a gated pair that also passed the overlap check; the pair itself is
+/// `MatchResult::pairs[pair]` (kept apart so sorting moves 32 bytes, not 200).
+#[derive(Debug, Clone, Copy)]
+struct Candidate {
+    nis: f64,
+    observed: usize,
+    map: usize,
+    pair: usize,
+}
+
+/// What is known about one observed line while matching.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Status {
+    Unmatched(RejectReason),
+    Matched,
+}
+
+/// Per-wall values computed once per scan: `cos β`, `sin β` and the wall's extent along
+/// its direction.
+#[derive(Debug, Clone, Copy)]
+struct WallCache {
+    cos: f64,
+    sin: f64,
+    extent: (f64, f64),
+}
+
+impl WallCache {
+    fn new(segment: &MapSegment) -> Self {
+        let (sin, cos) = (libm::sin(segment.line.beta), libm::cos(segment.line.beta));
+        // Coordinates along the direction d = (−sin β, cos β).
+        let along = |p: &Point2<f64>| -p.x * sin + p.y * cos;
+        let (t0, t1) = (along(&segment.start), along(&segment.end));
+        Self {
+            cos,
+            sin,
+            extent: (t0.min(t1), t0.max(t1)),
+        }
+    }
+}
+
+/// The result of matching one scan, reused across scans: [`Matcher::match_lines`] clears
+/// and refills its buffers, so once they have grown to the largest scan and map, matching
+/// does not allocate.
+#[derive(Debug, Clone, Default)]
+pub struct MatchResult {
+    matches: Vec<LineMatch>,
+    rejections: Vec<Rejection>,
+    candidates: Vec<Candidate>,
+    pairs: Vec<LineMatch>,
+    status: Vec<Status>,
+    owner: Vec<Option<usize>>,
+    walls: Vec<WallCache>,
+}
+
+impl MatchResult {
+    /// An empty result; buffers grow on first use.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// The matches, in the order they were assigned (increasing NIS).
+    pub fn matches(&self) -> &[LineMatch] {
+        &self.matches
+    }
+
+    /// The observed lines that were not matched, by increasing observed index.
+    pub fn rejections(&self) -> &[Rejection] {
+        &self.rejections
+    }
+
+    /// The match of observed line `observed`, if it has one.
+    pub fn match_of(&self, observed: usize) -> Option<&LineMatch> {
+        self.matches.iter().find(|m| m.observed == observed)
+    }
+
+    fn clear(&mut self, num_observed: usize, num_walls: usize) {
+        self.matches.clear();
+        self.rejections.clear();
+        self.candidates.clear();
+        self.pairs.clear();
+        self.status.clear();
+        self.status
+            .resize(num_observed, Status::Unmatched(RejectReason::OutsideGate));
+        self.owner.clear();
+        self.owner.resize(num_walls, None);
+        self.walls.clear();
+    }
+}
+
+/// Associates observed lines with map walls.
+///
+/// For every pair (observed line `i`, wall `j`) at the filter's current state (the
+/// predicted pose `x⁻` and covariance `P⁻`), the innovation of ekf-core's [`LaserLine`]
+/// model gives `NIS_ij = yᵀ S⁻¹ y`. A pair is a candidate when
+/// 1. `NIS_ij ≤ χ²₂⁻¹(gate_probability)`, and
+/// 2. the observed segment, its end points mapped into the world with the predicted
+///    sensor pose `x⁻ ⊕ mount` and projected onto the wall's direction, overlaps the
+///    wall's extent by at least `min(min_overlap, min_overlap_fraction · ℓ)`.
+///
+/// Conflicts are resolved globally and greedily: candidates are sorted by NIS (ties by
+/// observed, then wall index) and assigned in that order, skipping lines already matched
+/// and walls already taken. So each wall is used at most once, and a wall goes to the
+/// line that fits it best.
+///
+/// Before the full innovation of a pair is computed, two lower bounds on its NIS skip
+/// pairs that cannot pass the gate, which changes no decision: for a 2-D Gaussian
+/// `yᵀ S⁻¹ y ≥ y_k² / S_kk` for each component, with `S_ψψ = P_θθ + R_ψψ` exactly (the
+/// ψ row of `H` is `(0, 0, −1)`) and `S_rr ≤ (1 + |t_mount|²)·tr P + R_rr` (the r row of
+/// `H` has norm² `1 + (∂C/∂θ)²` and `|∂C/∂θ| ≤ |t_mount|`, the mount's offset).
+#[derive(Debug, Clone)]
+pub struct Matcher {
+    params: MatchParams,
+    gate: ChiSquareGate<f64>,
+}
+
+impl Matcher {
+    /// A matcher with `params`. Fails on a gate probability outside (0, 1), or a negative
+    /// or non-finite overlap parameter.
+    pub fn new(params: MatchParams) -> Result<Self, Error> {
+        let gate = ChiSquareGate::from_probability(params.gate_probability, 2)?;
+        for (v, what) in [
+            (params.min_overlap, "matching min_overlap"),
+            (params.min_overlap_fraction, "matching min_overlap_fraction"),
+        ] {
+            if !v.is_finite() {
+                return Err(Error::NonFinite { what });
+            }
+            if v < 0.0 {
+                return Err(Error::OutOfRange {
+                    what,
+                    expected: ">= 0",
+                });
+            }
+        }
+        Ok(Self { params, gate })
+    }
+
+    /// The parameters.
+    pub fn params(&self) -> &MatchParams {
+        &self.params
+    }
+
+    /// The chi-square gate (2 dof).
+    pub fn gate(&self) -> &ChiSquareGate<f64> {
+        &self.gate
+    }
+
+    /// Matches `observed` (sensor frame) against `map` at the state of `ekf`, with the
+    /// laser mounted at `mount` on the robot, into `out` (cleared first). Never fails:
+    /// an invalid observed line is rejected with [`RejectReason::InvalidLine`], and a
+    /// wall whose innovation cannot be computed (non-finite) is never a candidate.
+    pub fn match_lines(
+        &self,
+        observed: &[ObservedLine],
+        map: &LineMap,
+        ekf: &Ekf<f64>,
+        mount: &Pose2<f64>,
+        out: &mut MatchResult,
+    ) {
+        out.clear(observed.len(), map.segments.len());
+        out.walls.extend(map.segments.iter().map(WallCache::new));
+        for (i, line) in observed.iter().enumerate() {
+            if let Err(e) = validate_observed(line) {
+                out.status[i] = Status::Unmatched(RejectReason::InvalidLine(e));
+                continue;
+            }
+            self.gate_line(i, line, map, ekf, mount, out);
+        }
+        out.candidates.sort_unstable_by(|a, b| {
+            a.nis
+                .total_cmp(&b.nis)
+                .then(a.observed.cmp(&b.observed))
+                .then(a.map.cmp(&b.map))
+        });
+        for c in &out.candidates {
+            match (out.status[c.observed], out.owner[c.map]) {
+                (Status::Matched, _) => {}
+                (Status::Unmatched(_), None) => {
+                    out.status[c.observed] = Status::Matched;
+                    out.owner[c.map] = Some(c.observed);
+                    if let Some(pair) = out.pairs.get(c.pair) {
+                        out.matches.push(*pair);
+                    }
+                }
+                // The first taken wall met in NIS order is this line's best one.
+                (Status::Unmatched(RejectReason::MapLineTaken { .. }), Some(_)) => {}
+                (Status::Unmatched(_), Some(by)) => {
+                    out.status[c.observed] =
+                        Status::Unmatched(RejectReason::MapLineTaken { map: c.map, by });
+                }
+            }
+        }
+        for (i, status) in out.status.iter().enumerate() {
+            if let Status::Unmatched(reason) = status {
+                out.rejections.push(Rejection {
+                    observed: i,
+                    reason: *reason,
+                });
+            }
+        }
+    }
+
+    /// Finds the candidate walls of one valid observed line and records why it has none.
+    /// The cheap checks come first (NIS bounds, then overlap); the full innovation only
+    /// for walls that pass both.
+    fn gate_line(
+        &self,
+        i: usize,
+        line: &ObservedLine,
+        map: &LineMap,
+        ekf: &Ekf<f64>,
+        mount: &Pose2<f64>,
+        out: &mut MatchResult,
+    ) {
+        let pair = PairGate::new(line, ekf, mount, &self.gate);
+        let first = out.candidates.len();
+        for (j, (segment, wall)) in map.segments.iter().zip(&out.walls).enumerate() {
+            if !pair.may_pass(segment, wall) {
+                continue;
+            }
+            let Some(overlap) = overlap(wall, &pair.a, &pair.b, &self.params) else {
+                continue;
+            };
+            if let Some(innovation) = pair.gated_innovation(segment) {
+                out.candidates.push(Candidate {
+                    nis: innovation.nis,
+                    observed: i,
+                    map: j,
+                    pair: out.pairs.len(),
+                });
+                out.pairs.push(LineMatch {
+                    observed: i,
+                    map: j,
+                    innovation,
+                    overlap,
+                });
+            }
+        }
+        if out.candidates.len() > first {
+            return;
+        }
+        // No candidate: "no overlap" if some wall passed the gate, else "outside gate".
+        let closest = map
+            .segments
+            .iter()
+            .zip(&out.walls)
+            .enumerate()
+            .filter(|(_, (segment, wall))| pair.may_pass(segment, wall))
+            .filter_map(|(j, (segment, _))| pair.gated_innovation(segment).map(|n| (j, n.nis)))
+            .min_by(|a, b| a.1.total_cmp(&b.1));
+        if let Some((map, _)) = closest {
+            out.status[i] = Status::Unmatched(RejectReason::NoOverlap { map });
+        }
+    }
+}
+
+/// The gate applied to one observed line and any wall, with what it needs precomputed.
+struct PairGate<'a> {
+    line: &'a ObservedLine,
+    ekf: &'a Ekf<f64>,
+    mount: &'a Pose2<f64>,
+    gate: &'a ChiSquareGate<f64>,
+    sensor: Pose2<f64>,
+    /// `S_ψψ = P_θθ + R_ψψ`.
+    s_psi: f64,
+    /// An upper bound on `S_rr`: `(1 + |t_mount|²)·tr P + R_rr`.
+    s_r_max: f64,
+    /// The observed end points in the world, at the predicted sensor pose.
+    a: Point2<f64>,
+    b: Point2<f64>,
+}
+
+impl<'a> PairGate<'a> {
+    fn new(
+        line: &'a ObservedLine,
+        ekf: &'a Ekf<f64>,
+        mount: &'a Pose2<f64>,
+        gate: &'a ChiSquareGate<f64>,
+    ) -> Self {
+        let p = ekf.covariance();
+        let sensor = ekf.pose().compose(mount);
+        // ‖H_r‖² = 1 + (∂C/∂θ)² ≤ 1 + |t_mount|², and H P Hᵀ ≤ ‖H‖² tr P.
+        let lever = mount.x * mount.x + mount.y * mount.y;
+        Self {
+            line,
+            ekf,
+            mount,
+            gate,
+            sensor,
+            s_psi: p[(2, 2)] + line.covariance[(1, 1)],
+            s_r_max: (1.0 + lever) * p.trace() + line.covariance[(0, 0)],
+            a: sensor.transform_point(&line.start),
+            b: sensor.transform_point(&line.end),
+        }
+    }
+
+    /// `false` if a lower bound on the pair's NIS already exceeds the gate:
+    /// `y_ψ² / S_ψψ` or `y_r² / S_rr,max`, with `ψ̂ = β − θ_s (+π if C < 0)`,
+    /// `r̂ = |C|`, `C = ρ − x_s cos β − y_s sin β`.
+    fn may_pass(&self, segment: &MapSegment, wall: &WallCache) -> bool {
+        let c = segment.line.rho - self.sensor.x * wall.cos - self.sensor.y * wall.sin;
+        let flip = if c < 0.0 { PI } else { 0.0 };
+        let y_psi = wrapped_diff(
+            self.line.line.beta,
+            segment.line.beta - self.sensor.theta + flip,
+        );
+        let y_r = self.line.line.rho - c.abs();
+        let threshold = self.gate.threshold;
+        y_psi * y_psi <= threshold * self.s_psi && y_r * y_r <= threshold * self.s_r_max
+    }
+
+    /// The pair's innovation (ekf-core's [`LaserLine`] model) if it passes the gate.
+    fn gated_innovation(&self, segment: &MapSegment) -> Option<Innovation<f64, 2>> {
+        let model = LaserLine {
+            observed: self.line.line,
+            covariance: self.line.covariance,
+            map_line: segment.line,
+            mount: *self.mount,
+        };
+        let innovation = self.ekf.innovation(&model).ok()?;
+        self.gate.accepts(innovation.nis).then_some(innovation)
+    }
+}
+
+/// `a − b` wrapped to (−π, π]; a few additions of 2π in the common case of arguments
+/// near the range, [`angle_diff`] otherwise.
+fn wrapped_diff(a: f64, b: f64) -> f64 {
+    let d = a - b;
+    if d > PI && d <= 3.0 * PI {
+        d - TAU
+    } else if d <= -PI && d > -3.0 * PI {
+        d + TAU
+    } else if d > -PI && d <= PI {
+        d
+    } else {
+        angle_diff(a, b)
+    }
+}
+
+/// `Some(overlap length)` if the observed segment `a–b` (world frame) overlaps the wall's
+/// extent along the wall's direction `d = (−sin β, cos β)` by at least
+/// `min(min_overlap, min_overlap_fraction · ℓ)`.
+fn overlap(
+    wall: &WallCache,
+    a: &Point2<f64>,
+    b: &Point2<f64>,
+    params: &MatchParams,
+) -> Option<f64> {
+    let (ta, tb) = (
+        -a.x * wall.sin + a.y * wall.cos,
+        -b.x * wall.sin + b.y * wall.cos,
+    );
+    let (lo, hi) = (ta.min(tb), ta.max(tb));
+    let overlap = hi.min(wall.extent.1) - lo.max(wall.extent.0);
+    let required = params
+        .min_overlap
+        .min(params.min_overlap_fraction * (hi - lo));
+    (overlap >= required).then_some(overlap)
+}
+
+/// Fails unless the line, its end points and covariance are finite and the covariance is
+/// symmetric positive definite.
+pub(crate) fn validate_observed(observed: &ObservedLine) -> Result<(), Error> {
+    let values = [
+        observed.line.rho,
+        observed.line.beta,
+        observed.start.x,
+        observed.start.y,
+        observed.end.x,
+        observed.end.y,
+    ];
+    if values
+        .iter()
+        .chain(observed.covariance.iter())
+        .any(|v| !v.is_finite())
+    {
+        return Err(Error::NonFinite {
+            what: "observed line",
+        });
+    }
+    let c = &observed.covariance;
+    let scale = c.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+    if (c[(0, 1)] - c[(1, 0)]).abs() > 1e-9 * scale {
+        return Err(Error::NotSymmetric {
+            what: "observed line covariance",
+        });
+    }
+    if c.cholesky().is_none() {
+        return Err(Error::NotPositiveDefinite {
+            what: "observed line covariance",
+        });
+    }
+    Ok(())
+}

@@ -1,0 +1,268 @@
+//! The Localizer on a simulated run: ray-cast scans, biased odometry, a noisy compass.
+
+mod localizer_sim;
+mod matching_support;
+
+use ekf_core::{angle_diff, DiffDrive, Pose2};
+use localizer_sim::{commands, measured, mount, ranges, scan, start, walls};
+use lrf_lines::{
+    CompassConfig, ExtractionError, ExtractionParams, LineMap, Localizer, LocalizerConfig,
+    LocalizerError,
+};
+use matching_support::{map_of, Rng};
+use nalgebra::{Matrix3, Vector3};
+
+fn config() -> LocalizerConfig {
+    LocalizerConfig {
+        laser_mount: mount(),
+        ..LocalizerConfig::default()
+    }
+}
+
+fn initial_covariance() -> Matrix3<f64> {
+    Matrix3::from_diagonal(&Vector3::new(1e-4, 1e-4, 1.0_f64.to_radians().powi(2)))
+}
+
+/// Fails unless `p` is symmetric and positive definite.
+fn assert_spd(p: &Matrix3<f64>, step: usize) {
+    assert!(
+        (p - p.transpose()).abs().max() <= 1e-12 * p.abs().max(),
+        "step {step}: asymmetric {p}"
+    );
+    assert!(
+        p.cholesky().is_some(),
+        "step {step}: not positive definite {p}"
+    );
+}
+
+/// Statistics of one simulated lap.
+struct Lap {
+    max_position_error: f64,
+    max_heading_error: f64,
+    rms_position_error: f64,
+    scans_with_fusion: usize,
+    scans: usize,
+    odometry_only_final_error: f64,
+    /// Steps whose NEES `eᵀ P⁻¹ e` is within the 99 % chi-square bound (3 dof, 11.34).
+    consistent_steps: usize,
+}
+
+/// Drives one lap; scans every step, compass every other step.
+fn lap(localizer: &mut Localizer, seed: u64) -> Lap {
+    let walls = walls();
+    let robot = DiffDrive::paper();
+    let mut rng = Rng::new(seed);
+    let mut truth = start();
+    let mut dead_reckoning = start();
+    let (mut max_pos, mut max_head, mut sum_sq, mut fused_scans) = (0.0_f64, 0.0_f64, 0.0, 0);
+    let mut consistent = 0;
+    let commands = commands();
+    for (k, cmd) in commands.iter().enumerate() {
+        truth = robot.motion(cmd).apply(&truth);
+        let odo = measured(cmd, &mut rng);
+        dead_reckoning = robot.motion(&odo).apply(&dead_reckoning);
+        localizer.predict_wheels(&odo).unwrap();
+        if k % 2 == 0 {
+            let heading = truth.theta + 2.0_f64.to_radians() * rng.normal();
+            localizer.update_compass(heading).unwrap();
+        }
+        let r = ranges(&truth, &walls, &mut rng);
+        let report = localizer.update_scan(&scan(&r)).unwrap();
+        if report.fused > 0 {
+            fused_scans += 1;
+        }
+        assert_eq!(report.matched + report.rejected, report.extracted);
+        assert_eq!(report.fused + report.refused, report.matched);
+        let pose = localizer.pose();
+        let e = ((pose.x - truth.x).powi(2) + (pose.y - truth.y).powi(2)).sqrt();
+        max_pos = max_pos.max(e);
+        max_head = max_head.max(angle_diff(pose.theta, truth.theta).abs());
+        sum_sq += e * e;
+        assert_spd(localizer.covariance(), k);
+        let err = Vector3::new(
+            pose.x - truth.x,
+            pose.y - truth.y,
+            angle_diff(pose.theta, truth.theta),
+        );
+        let nees = err.dot(&(localizer.covariance().try_inverse().unwrap() * err));
+        if nees <= 11.34 {
+            consistent += 1;
+        }
+    }
+    Lap {
+        max_position_error: max_pos,
+        max_heading_error: max_head,
+        rms_position_error: (sum_sq / commands.len() as f64).sqrt(),
+        scans_with_fusion: fused_scans,
+        scans: commands.len(),
+        odometry_only_final_error: ((dead_reckoning.x - truth.x).powi(2)
+            + (dead_reckoning.y - truth.y).powi(2))
+        .sqrt(),
+        consistent_steps: consistent,
+    }
+}
+
+#[test]
+fn a_lap_with_a_known_map_stays_accurate_and_consistent() {
+    let mut localizer =
+        Localizer::new(config(), start(), initial_covariance(), map_of(&walls())).unwrap();
+    let lap = lap(&mut localizer, 1);
+    let summary = format!(
+        "max {:.4} m, rms {:.4} m, max heading {:.3}°, {}/{} scans fused, {} consistent, odometry alone {:.3} m",
+        lap.max_position_error,
+        lap.rms_position_error,
+        lap.max_heading_error.to_degrees(),
+        lap.scans_with_fusion,
+        lap.scans,
+        lap.consistent_steps,
+        lap.odometry_only_final_error
+    );
+    assert!(
+        lap.odometry_only_final_error > 0.3,
+        "the run must be hard: {summary}"
+    );
+    // Measured at commit time: max 1.6 mm, rms 0.5 mm, 0.033°.
+    assert!(lap.max_position_error < 0.01, "{summary}");
+    assert!(lap.rms_position_error < 0.003, "{summary}");
+    assert!(lap.max_heading_error < 0.2_f64.to_radians(), "{summary}");
+    // The covariance is honest: the error is inside its 99 % ellipsoid almost always.
+    assert!(lap.consistent_steps * 100 >= lap.scans * 95, "{summary}");
+    assert_eq!(lap.scans_with_fusion, lap.scans, "{summary}");
+    // The diagnostics of the last scan are there for visualisation.
+    assert!(!localizer.last_lines().is_empty());
+    assert_eq!(
+        localizer.last_matches().matches().len(),
+        localizer.last_fusions().len()
+    );
+    assert!(localizer
+        .last_fusions()
+        .iter()
+        .all(|f| f.accepted && f.nis <= 9.2104));
+}
+
+#[test]
+fn a_lap_with_the_first_scan_map_stays_accurate() {
+    let mut localizer =
+        Localizer::with_first_scan_map(config(), start(), initial_covariance()).unwrap();
+    let mut rng = Rng::new(99);
+    let r = ranges(&start(), &walls(), &mut rng);
+    let report = localizer.update_scan(&scan(&r)).unwrap();
+    assert!(report.map_built && report.fused == 0);
+    // From (0.5, 0.5) facing +x the laser sees the right, bottom and top walls.
+    assert!(localizer.map().len() >= 3, "{:#?}", localizer.map());
+    assert_eq!(localizer.map().len(), report.extracted);
+    let lap = lap(&mut localizer, 2);
+    let summary = format!(
+        "max {:.4} m, rms {:.4} m, max heading {:.3}°, {}/{} scans fused, {} consistent, map {:#?}",
+        lap.max_position_error,
+        lap.rms_position_error,
+        lap.max_heading_error.to_degrees(),
+        lap.scans_with_fusion,
+        lap.scans,
+        lap.consistent_steps,
+        localizer.map()
+    );
+    // The left wall is not in this map: facing it, the heading rests on the compass
+    // (σ = 2°) and the biased odometry alone, hence the looser heading bound.
+    assert!(lap.max_position_error < 0.08, "{summary}");
+    assert!(lap.rms_position_error < 0.03, "{summary}");
+    assert!(lap.max_heading_error < 2.5_f64.to_radians(), "{summary}");
+    assert!(lap.scans_with_fusion * 10 >= lap.scans * 9, "{summary}");
+}
+
+#[test]
+fn a_compass_outlier_is_gated_out() {
+    let mut localizer =
+        Localizer::new(config(), start(), initial_covariance(), map_of(&walls())).unwrap();
+    let (pose, p) = (localizer.pose(), *localizer.covariance());
+    let outcome = localizer
+        .update_compass(pose.theta + 90.0_f64.to_radians())
+        .unwrap();
+    assert!(!outcome.accepted && outcome.nis > 6.63);
+    assert_eq!((localizer.pose(), *localizer.covariance()), (pose, p));
+    // A consistent heading is fused and shrinks the heading variance.
+    let outcome = localizer.update_compass(pose.theta + 0.01).unwrap();
+    assert!(outcome.accepted);
+    assert!(localizer.covariance()[(2, 2)] < p[(2, 2)]);
+    assert!(matches!(
+        localizer.update_compass(f64::NAN),
+        Err(LocalizerError::Filter(_))
+    ));
+}
+
+#[test]
+fn bad_config_and_scans_are_named_errors() {
+    let build =
+        |c: LocalizerConfig| Localizer::new(c, start(), initial_covariance(), LineMap::default());
+    let mut c = config();
+    c.robot.track = 0.0;
+    let e = build(c).unwrap_err();
+    assert!(
+        matches!(e, LocalizerError::Config { group: "robot", .. }),
+        "{e}"
+    );
+    assert!(e.to_string().contains("[robot]") && e.to_string().contains("track"));
+    let mut c = config();
+    c.compass.variance = 0.0;
+    assert!(matches!(
+        build(c).unwrap_err(),
+        LocalizerError::Config {
+            group: "compass",
+            ..
+        }
+    ));
+    let mut c = config();
+    c.matching.gate_probability = 2.0;
+    assert!(matches!(
+        build(c).unwrap_err(),
+        LocalizerError::Config {
+            group: "matching",
+            ..
+        }
+    ));
+    let mut c = config();
+    c.extraction = ExtractionParams {
+        min_points: 1,
+        ..ExtractionParams::default()
+    };
+    assert!(matches!(
+        build(c).unwrap_err(),
+        LocalizerError::Extraction(ExtractionError::InvalidParameter {
+            name: "min_points",
+            ..
+        })
+    ));
+    let nan_pose = Localizer::new(
+        config(),
+        Pose2::new(f64::NAN, 0.0, 0.0),
+        initial_covariance(),
+        LineMap::default(),
+    );
+    assert!(matches!(nan_pose, Err(LocalizerError::Filter(_))));
+    // A scan with a broken header is refused and changes nothing.
+    let mut localizer = build(config()).unwrap();
+    let before = (localizer.pose(), *localizer.covariance());
+    let ranges = [1.0_f32; 10];
+    let mut bad = scan(&ranges);
+    bad.angle_increment = 0.0;
+    assert!(matches!(
+        localizer.update_scan(&bad),
+        Err(LocalizerError::Extraction(_))
+    ));
+    assert_eq!((localizer.pose(), *localizer.covariance()), before);
+    assert!(localizer.last_lines().is_empty() && localizer.last_matches().matches().is_empty());
+}
+
+#[test]
+fn config_files_may_omit_groups_and_fields() {
+    let c: LocalizerConfig = serde_json::from_str(r#"{"compass": {"variance": 0.01}}"#).unwrap();
+    assert_eq!(c.compass.variance, 0.01);
+    assert_eq!(c.compass.gate_probability, 0.99);
+    assert_eq!(c.robot, DiffDrive::paper());
+    assert_eq!(c.matching, Default::default());
+    let d = LocalizerConfig::default();
+    assert!((d.compass.variance - 2.0_f64.to_radians().powi(2)).abs() < 1e-15);
+    assert!((CompassConfig::paper().variance - 3.046e-6).abs() < 1e-9);
+    let text = serde_json::to_string(&d).unwrap();
+    assert_eq!(serde_json::from_str::<LocalizerConfig>(&text).unwrap(), d);
+}
