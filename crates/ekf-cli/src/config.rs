@@ -118,7 +118,11 @@ pub struct MotionConfig {
 
 impl Default for MotionConfig {
     fn default() -> Self {
-        Self { source: MotionSource::Auto, left_joint: "left_wheel_joint".into(), right_joint: "right_wheel_joint".into() }
+        Self {
+            source: MotionSource::Auto,
+            left_joint: "left_wheel_joint".into(),
+            right_joint: "right_wheel_joint".into(),
+        }
     }
 }
 
@@ -140,7 +144,13 @@ pub struct InitialPose {
 
 impl Default for InitialPose {
     fn default() -> Self {
-        Self { x: 0.0, y: 0.0, theta: 0.0, sigma_xy: 0.05, sigma_theta: 0.02 }
+        Self {
+            x: 0.0,
+            y: 0.0,
+            theta: 0.0,
+            sigma_xy: 0.05,
+            sigma_theta: 0.02,
+        }
     }
 }
 
@@ -169,28 +179,41 @@ pub struct LaserConfig {
 
 impl Default for LaserConfig {
     fn default() -> Self {
-        Self { mount_from_tf_static: true, base_frame: "base_link".into() }
+        Self {
+            mount_from_tf_static: true,
+            base_frame: "base_link".into(),
+        }
     }
 }
 
 impl Config {
     /// Parses TOML text; `path` names the source in errors.
     pub fn from_toml(text: &str, path: &str) -> Result<Self, ConfigError> {
-        let config: Config = toml::from_str(text).map_err(|e| ConfigError::Parse { path: path.into(), message: e.to_string().trim_end().to_string() })?;
+        let config: Config = toml::from_str(text).map_err(|e| ConfigError::Parse {
+            path: path.into(),
+            message: e.to_string().trim_end().to_string(),
+        })?;
         config.validated(path)
     }
 
     /// Reads and parses a TOML file.
     pub fn load(path: &Path) -> Result<Self, ConfigError> {
         let name = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Io { path: name.clone(), source })?;
+        let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Io {
+            path: name.clone(),
+            source,
+        })?;
         Self::from_toml(&text, &name)
     }
 
     /// Checks the values that serde cannot: positive lengths and deviations, probabilities
     /// in (0, 1), valid extraction parameters.
     pub fn validated(self, path: &str) -> Result<Self, ConfigError> {
-        let invalid = |key: &str, message: &str| ConfigError::Invalid { path: path.into(), key: key.into(), message: message.into() };
+        let invalid = |key: &str, message: &str| ConfigError::Invalid {
+            path: path.into(),
+            key: key.into(),
+            message: message.into(),
+        };
         let l = &self.localizer;
         let positive = [
             ("localizer.robot.wheel_radius", l.robot.wheel_radius),
@@ -201,13 +224,28 @@ impl Config {
         ];
         for (key, v) in positive {
             if !(v.is_finite() && v > 0.0) {
-                return Err(invalid(key, &format!("expected a finite number > 0, found {v}")));
+                return Err(invalid(
+                    key,
+                    &format!("expected a finite number > 0, found {v}"),
+                ));
             }
         }
-        let probabilities = [("localizer.compass.gate_probability", l.compass.gate_probability), ("localizer.matching.gate_probability", l.matching.gate_probability)];
+        let probabilities = [
+            (
+                "localizer.compass.gate_probability",
+                l.compass.gate_probability,
+            ),
+            (
+                "localizer.matching.gate_probability",
+                l.matching.gate_probability,
+            ),
+        ];
         for (key, p) in probabilities {
             if !(p > 0.0 && p < 1.0) {
-                return Err(invalid(key, &format!("expected a probability in (0, 1), found {p}")));
+                return Err(invalid(
+                    key,
+                    &format!("expected a probability in (0, 1), found {p}"),
+                ));
             }
         }
         let finite = [
@@ -217,17 +255,94 @@ impl Config {
             ("localizer.laser_mount.x", l.laser_mount.x),
             ("localizer.laser_mount.y", l.laser_mount.y),
             ("localizer.laser_mount.theta", l.laser_mount.theta),
-            ("compass_calibration.declination", self.compass_calibration.declination),
-            ("compass_calibration.map_offset", self.compass_calibration.map_offset),
+            (
+                "compass_calibration.declination",
+                self.compass_calibration.declination,
+            ),
+            (
+                "compass_calibration.map_offset",
+                self.compass_calibration.map_offset,
+            ),
         ];
         for (key, v) in finite {
             if !v.is_finite() {
-                return Err(invalid(key, &format!("expected a finite number, found {v}")));
+                return Err(invalid(
+                    key,
+                    &format!("expected a finite number, found {v}"),
+                ));
             }
         }
-        ekf_core::WheelNoise::new(l.wheel_noise.delta, l.wheel_noise.floor).map_err(|e| invalid("localizer.wheel_noise", &e.to_string()))?;
-        l.odometry_noise.validated().map_err(|e| invalid("localizer.odometry_noise", &e.to_string()))?;
-        l.extraction.clone().validated().map_err(|e| invalid("localizer.extraction", &e.to_string()))?;
+        ekf_core::WheelNoise::new(l.wheel_noise.delta, l.wheel_noise.floor)
+            .map_err(|e| invalid("localizer.wheel_noise", &e.to_string()))?;
+        l.odometry_noise
+            .validated()
+            .map_err(|e| invalid("localizer.odometry_noise", &e.to_string()))?;
+        l.extraction
+            .clone()
+            .validated()
+            .map_err(|e| invalid("localizer.extraction", &e.to_string()))?;
         Ok(self)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn documented_defaults_are_the_defaults() {
+        let parsed = Config::from_toml(DEFAULT_TOML, "default").unwrap();
+        assert_eq!(parsed, Config::default());
+    }
+
+    #[test]
+    fn errors_name_line_and_key() {
+        let err = Config::from_toml("[initial]\nx = 1.0\nsigma_xx = 2.0\n", "robot.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(err.starts_with("robot.toml: "), "{err}");
+        assert!(err.contains("line 3") && err.contains("sigma_xx"), "{err}");
+        let err = Config::from_toml(
+            "[localizer.robot]\nwheel_radius = 0.05\ntrack = \"wide\"\n",
+            "r.toml",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(err.contains("line 3") && err.contains("track"), "{err}");
+        let err = Config::from_toml(
+            "[localizer.robot]\nwheel_radius = -0.05\ntrack = 0.5\n",
+            "r.toml",
+        )
+        .unwrap_err()
+        .to_string();
+        assert_eq!(
+            err,
+            "r.toml: localizer.robot.wheel_radius: expected a finite number > 0, found -0.05"
+        );
+        let err = Config::from_toml("[localizer.extraction]\nsplit_distanse = 0.1\n", "t.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("line 2") && err.contains("split_distanse"),
+            "{err}"
+        );
+        let err = Config::from_toml(
+            "[localizer.wheel_noise]\ndelta = 0.01\nflor = 0.0\n",
+            "t.toml",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(err.contains("line 3") && err.contains("flor"), "{err}");
+        let err = Config::from_toml("[motion]\nsource = \"gps\"\n", "m.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("line 2") && err.contains("gps"), "{err}");
+        let err = Config::from_toml("[localizer.extraction]\nmin_points = 1\n", "e.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("localizer.extraction") && err.contains("min_points"),
+            "{err}"
+        );
     }
 }

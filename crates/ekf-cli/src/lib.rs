@@ -3,6 +3,7 @@
 //! nothing in this library prints or exits.
 
 pub mod commands;
+pub mod config;
 pub mod eval;
 pub mod import;
 pub mod mcap_io;

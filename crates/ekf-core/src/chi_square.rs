@@ -78,6 +78,7 @@ pub fn chi_square_quantile(p: f64, dof: u32) -> Result<f64, Error> {
 /// freedom (the measurement's dimension).
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
 pub struct ChiSquareGate<T> {
     /// NIS threshold.
     pub threshold: T,

@@ -9,6 +9,7 @@ use nalgebra::{Point2, Vector3};
 /// A planar pose `(x, y, θ)`: position in metres, heading in radians, wrapped to (−π, π].
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
 pub struct Pose2<T> {
     /// x coordinate (m).
     pub x: T,
@@ -88,6 +89,7 @@ impl<T: Real> Pose2<T> {
 /// A line in normal form `x cos β + y sin β = ρ`, `ρ ≥ 0`, `β` in (−π, π].
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
 pub struct Line<T> {
     /// Distance from the origin to the line, ρ ≥ 0 (m).
     pub rho: T,

@@ -7,6 +7,7 @@ use nalgebra::{Matrix3, Matrix3x2};
 /// The robot's wheel geometry.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
 pub struct DiffDrive<T> {
     /// Radius of the driven wheels, `R` (m).
     pub wheel_radius: T,

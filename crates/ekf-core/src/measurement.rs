@@ -31,6 +31,7 @@ pub fn heading_from_compass_bearing<T: Real>(bearing: T, declination: T, map_off
 /// [`heading_from_compass_bearing`] for the signs.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
 pub struct CompassCalibration<T> {
     /// Magnetic declination, east-positive (rad).
     pub declination: T,

@@ -15,6 +15,7 @@ use nalgebra::{Matrix2, Matrix3};
 /// error has σ ≈ 0.036 rad/s: the default floor.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
 pub struct WheelNoise<T> {
     /// Proportional factor δ (dimensionless): variance `δ·ω²`. Paper: 0.01.
     pub delta: T,
@@ -62,7 +63,7 @@ impl<T: Real> Default for WheelNoise<T> {
     fn default() -> Self {
         Self {
             delta: T::lit(0.01),
-            floor: T::lit(0.036 * 0.036),
+            floor: T::lit(1.296e-3),
         }
     }
 }
@@ -79,6 +80,7 @@ impl<T: Real> Default for WheelNoise<T> {
 /// uncertainty, however often its odometry is published.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
 pub struct OdometryNoise<T> {
     /// `a₁`: distance noise per metre travelled (m/m).
     pub a1: T,

@@ -13,7 +13,7 @@ use serde::{Deserialize, Serialize};
 
 /// Matching parameters.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
+#[serde(default, deny_unknown_fields)]
 pub struct MatchParams {
     /// Probability of the chi-square gate on the 2-D line innovation: a pair is a
     /// candidate when `NIS = yᵀ S⁻¹ y ≤ χ²₂⁻¹(p)`. Default 0.99 (threshold 9.21).

@@ -8,7 +8,7 @@ use serde::{Deserialize, Serialize};
 /// take the [`Default`] values, which suit a SICK LMS 2xx (0.25°–1° resolution, cm/mm
 /// range mode, indoor walls within ~15 m).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
+#[serde(default, deny_unknown_fields)]
 pub struct ExtractionParams {
     /// Range noise σ_ρ of one reading (m). Default 0.01: the LMS 2xx's statistical error
     /// is 5–10 mm indoors, and its output is quantised to 1 cm in cm mode.

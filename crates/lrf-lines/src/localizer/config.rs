@@ -9,7 +9,7 @@ use serde::{Deserialize, Serialize};
 /// map. Missing groups or fields in a config file take the defaults below
 /// (`#[serde(default)]`); `robot` must be given whole if given.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
+#[serde(default, deny_unknown_fields)]
 pub struct LocalizerConfig {
     /// Wheel geometry. Default: the paper's robot, wheel radius 0.05 m, track 0.60 m.
     pub robot: DiffDrive<f64>,
@@ -49,7 +49,7 @@ impl Default for LocalizerConfig {
 
 /// Compass heading noise and gate.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
+#[serde(default, deny_unknown_fields)]
 pub struct CompassConfig {
     /// Heading variance (rad²). Default `(2°)² = 1.218e-3 rad²`: a CMPS03 is good to a
     /// few degrees indoors. The paper's "0.1°" is [`CompassConfig::paper`].

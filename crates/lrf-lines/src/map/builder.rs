@@ -11,7 +11,7 @@ use serde::{Deserialize, Serialize};
 
 /// How [`MapBuilder`] decides that two sightings are the same wall.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
+#[serde(default, deny_unknown_fields)]
 pub struct MapBuilderParams {
     /// Probability of the chi-square test (2 dof) on the difference of `(ρ, β)`.
     /// Default 0.99 (threshold 9.21).
