@@ -134,7 +134,7 @@ pub enum WriteError {
     Mcap {
         /// The bag.
         path: PathBuf,
-        /// The topic being written, or empty while finishing the file.
+        /// The topic being written (empty while creating the file).
         topic: String,
         /// The writer's error.
         #[source]
@@ -163,6 +163,15 @@ pub enum WriteError {
         topic: String,
         /// The stamp's seconds.
         sec: i32,
+    },
+    /// Writing the last chunk, the summary or the footer failed.
+    #[error("{path}: finishing the file: {source}", path = path.display())]
+    Finish {
+        /// The bag.
+        path: PathBuf,
+        /// The writer's error.
+        #[source]
+        source: mcap::McapError,
     },
     /// The file was written but could not be flushed to disk.
     #[error("{path}: flushing: {source}", path = path.display())]

@@ -169,9 +169,10 @@ impl BagWriter {
         let Some(mut writer) = self.inner.take() else {
             return Ok(());
         };
-        writer
-            .finish()
-            .map_err(|source| mcap_error(&self.path, "", source))?;
+        writer.finish().map_err(|source| WriteError::Finish {
+            path: self.path.clone(),
+            source,
+        })?;
         writer
             .into_inner()
             .flush()

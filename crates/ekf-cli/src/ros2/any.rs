@@ -32,6 +32,7 @@ macro_rules! any_message {
     ($($variant:ident($ty:ty)),* $(,)?) => {
         /// A decoded message of any supported type.
         #[derive(Debug, Clone, PartialEq)]
+        // A Marker is large; boxing it would make matching clumsy for one message at a time.
         #[allow(clippy::large_enum_variant)]
         pub enum AnyMessage {
             $(

@@ -1,5 +1,9 @@
 //! ROS 2 messages as plain Rust structs: CDR encoding and decoding, and the `ros2msg`
-//! schema text each type is stored with in an MCAP bag. Definitions follow ROS 2 Jazzy.
+//! schema text each type is stored with in an MCAP bag.
+//!
+//! Definitions follow ROS 2 Jazzy, whose wire layout equals Humble's for every type here.
+//! Schema texts list constants and fields without comments, in wire order; dependencies
+//! follow as `MSG: pkg/Type` sections, each once, as `ros2 bag record` stores them.
 //!
 //! ```
 //! use ekf_cli::ros2::{std_msgs::Header, builtin_interfaces::Time, RosMessage};

@@ -96,6 +96,8 @@ pub struct MagneticField {
 }
 
 /// `sensor_msgs/msg/NavSatStatus`: fix quality and which satellite systems were used.
+/// Constants as in Humble and Jazzy; later distributions add `STATUS_UNKNOWN = -2`, which
+/// changes no field.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub struct NavSatStatus {
     /// One of the `STATUS_*` constants.
