@@ -87,9 +87,6 @@ pub(crate) fn collect(scan: &LaserScan<'_>, table: &BeamTable, max_gap: f64, out
     sums.clear();
     points.reserve(scan.ranges.len());
     sums.reserve(scan.ranges.len() + 1);
-    let mut sum = Moments::default();
-    let mut origin = (0.0, 0.0);
-    sums.push(sum);
     let max_gap_sq = max_gap * max_gap;
     let mut run_start = 0;
     // The previous beam's point, if that beam was valid.
@@ -108,10 +105,7 @@ pub(crate) fn collect(scan: &LaserScan<'_>, table: &BeamTable, max_gap: f64, out
         if !joins {
             close_run(runs, run_start, points.len());
             run_start = points.len();
-            origin = (x, y);
         }
-        sum = sum.plus(x - origin.0, y - origin.1);
-        sums.push(sum);
         points.push(ScanPoint {
             x,
             y,
@@ -122,6 +116,19 @@ pub(crate) fn collect(scan: &LaserScan<'_>, table: &BeamTable, max_gap: f64, out
         previous = Some((x, y));
     }
     close_run(runs, run_start, points.len());
+    // A second, simple loop keeps the first one's registers free.
+    let mut sum = Moments::default();
+    sums.push(sum);
+    for run in runs.iter() {
+        let Some(run_points) = points.get(run.clone()) else {
+            continue;
+        };
+        let (ox, oy) = run_points.first().map_or((0.0, 0.0), |o| (o.x, o.y));
+        for p in run_points {
+            sum = sum.plus(p.x - ox, p.y - oy);
+            sums.push(sum);
+        }
+    }
 }
 
 /// Squared Euclidean distance between two points (m²).
