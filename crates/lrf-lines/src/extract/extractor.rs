@@ -63,11 +63,14 @@ impl LineExtractor {
     ///
     /// Steps: valid readings → points, cut into runs at invalid beams and at gaps over
     /// `max_point_gap`; each run split at the point farthest from its chord while that
-    /// distance exceeds `split_distance`; pieces with fewer than `min_points` points or a
-    /// chord shorter than `min_length` dropped; a weighted fit per piece; neighbours merged
-    /// when `(Δr, Δψ)ᵀ(Σ_a + Σ_b)⁻¹(Δr, Δψ) ≤ χ²₂⁻¹(merge_probability)` and their gap is at
-    /// most `max_point_gap`. End points are the first and last points projected onto the
-    /// line. A scan without valid readings gives no lines; only an invalid header is an
+    /// distance exceeds `split_distance` (the split point moved to where the points change
+    /// sides once both pieces are straight); pieces with fewer than `min_points` points or
+    /// a chord shorter than `min_length` dropped; a weighted fit per piece (Pfister et al.,
+    /// covariance = inverse Fisher information), with end points beyond 3σ trimmed;
+    /// neighbours merged and refitted when
+    /// `(Δr, Δψ)ᵀ(Σ_a + Σ_b)⁻¹(Δr, Δψ) ≤ χ²₂⁻¹(merge_probability)` and their gap is at
+    /// most `max_point_gap`; lines shorter than `min_length` dropped. End points are the
+    /// first and last points projected onto the line. A scan without valid readings gives no lines; only an invalid header is an
     /// error ([`ExtractionError::InvalidScan`]).
     pub fn extract(
         &mut self,
