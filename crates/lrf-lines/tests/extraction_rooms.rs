@@ -1,6 +1,12 @@
 //! Synthetic rooms, ray-cast at 0.25°, 0.5° and 1° with σ = 30 mm range noise: every
 //! visible wall piece is found once, within 3σ (reported σ) of its true (r, ψ), and no
 //! line appears across gaps, shadows or corners.
+//!
+//! The noise comes from fixed seeds, so the test is deterministic. With honest σ a 3σ
+//! bound is missed by chance in 0.27 % of comparisons (each scan makes 8–16); a sweep
+//! over 100 seeds per room and resolution missed in about 2 % of scans, as chance
+//! predicts, and miscounted lines in 3 of 1200 (a corner split left a few points of one
+//! wall on the next at 30 mm noise).
 
 mod extraction_support;
 

@@ -3,7 +3,7 @@
 
 use super::fit::{fit_trimmed, PointNoise};
 use super::merge::{merge_collinear, Candidate, MergeRule};
-use super::points::{collect, BeamTable, Run, ScanPoint};
+use super::points::{collect, BeamTable, Run, ScanPoint, ScanPoints};
 use super::split::split_runs;
 use super::{ExtractionError, ExtractionParams};
 use crate::{LaserScan, ObservedLine};
@@ -19,8 +19,7 @@ pub struct LineExtractor {
     params: ExtractionParams,
     merge_rule: MergeRule,
     beams: BeamTable,
-    points: Vec<ScanPoint>,
-    runs: Vec<Run>,
+    scan: ScanPoints,
     stack: Vec<Run>,
     segments: Vec<Run>,
     candidates: Vec<Candidate>,
@@ -48,8 +47,7 @@ impl LineExtractor {
                 },
             },
             beams: BeamTable::default(),
-            points: Vec::new(),
-            runs: Vec::new(),
+            scan: ScanPoints::default(),
             stack: Vec::new(),
             segments: Vec::new(),
             candidates: Vec::new(),
@@ -65,11 +63,14 @@ impl LineExtractor {
     ///
     /// Steps: valid readings → points, cut into runs at invalid beams and at gaps over
     /// `max_point_gap`; each run split at the point farthest from its chord while that
-    /// distance exceeds `split_distance`; pieces with fewer than `min_points` points or a
-    /// chord shorter than `min_length` dropped; a weighted fit per piece; neighbours merged
-    /// when `(Δr, Δψ)ᵀ(Σ_a + Σ_b)⁻¹(Δr, Δψ) ≤ χ²₂⁻¹(merge_probability)` and their gap is at
-    /// most `max_point_gap`. End points are the first and last points projected onto the
-    /// line. A scan without valid readings gives no lines; only an invalid header is an
+    /// distance exceeds `split_distance` (the split point moved to where the points change
+    /// sides once both pieces are straight); pieces with fewer than `min_points` points or
+    /// a chord shorter than `min_length` dropped; a weighted fit per piece (Pfister et al.,
+    /// covariance = inverse Fisher information), with end points beyond 3σ trimmed;
+    /// neighbours merged and refitted when
+    /// `(Δr, Δψ)ᵀ(Σ_a + Σ_b)⁻¹(Δr, Δψ) ≤ χ²₂⁻¹(merge_probability)` and their gap is at
+    /// most `max_point_gap`; lines shorter than `min_length` dropped. End points are the
+    /// first and last points projected onto the line. A scan without valid readings gives no lines; only an invalid header is an
     /// error ([`ExtractionError::InvalidScan`]).
     pub fn extract(
         &mut self,
@@ -79,26 +80,19 @@ impl LineExtractor {
         out.clear();
         scan.validate()?;
         self.beams.update(scan);
-        collect(
-            scan,
-            &self.beams,
-            self.params.max_point_gap,
-            &mut self.points,
-            &mut self.runs,
-        );
+        collect(scan, &self.beams, self.params.max_point_gap, &mut self.scan);
         self.segments.clear();
         split_runs(
-            &self.points,
-            &self.runs,
+            &self.scan,
             self.params.split_distance,
             self.params.min_points,
             &mut self.stack,
             &mut self.segments,
         );
         self.fit_segments();
-        merge_collinear(&self.points, &mut self.candidates, &self.merge_rule);
+        merge_collinear(&self.scan.points, &mut self.candidates, &self.merge_rule);
         for c in &self.candidates {
-            if let Some(line) = observed_line(&self.points, c) {
+            if let Some(line) = observed_line(&self.scan.points, c) {
                 if line.length() >= self.params.min_length {
                     out.push(line);
                 }
@@ -116,15 +110,18 @@ impl LineExtractor {
         let mut write = 0;
         for seg in &self.segments {
             let (Some(first), Some(last)) = (
-                self.points.get(seg.start),
-                seg.end.checked_sub(1).and_then(|i| self.points.get(i)),
+                self.scan.points.get(seg.start),
+                seg.end.checked_sub(1).and_then(|i| self.scan.points.get(i)),
             ) else {
                 continue;
             };
-            if libm::hypot(last.x - first.x, last.y - first.y) < self.params.min_length {
+            if seg.len() < self.params.min_points
+                || libm::hypot(last.x - first.x, last.y - first.y) < self.params.min_length
+            {
                 continue;
             }
             let Some((kept, fit)) = self
+                .scan
                 .points
                 .get(seg.clone())
                 .and_then(|p| fit_trimmed(p, &self.merge_rule.noise, self.params.min_points))
@@ -132,12 +129,15 @@ impl LineExtractor {
                 continue;
             };
             let support = write..write + kept.len();
-            self.points
+            self.scan
+                .points
                 .copy_within(seg.start + kept.start..seg.start + kept.end, write);
             write = support.end;
             self.candidates.push(Candidate { support, fit });
         }
-        self.points.truncate(write);
+        // From here on `scan.points` holds the candidates' supports only; its runs and
+        // prefix sums are stale until the next `collect`.
+        self.scan.points.truncate(write);
     }
 }
 

@@ -1,6 +1,7 @@
 //! Weighted least-squares line fit with per-point range and bearing noise (Pfister,
 //! Roumeliotis, Burdick, ICRA 2003) and its covariance, the inverse Fisher information.
 
+use super::moments::Moments;
 use super::points::ScanPoint;
 use core::ops::Range;
 use ekf_core::wrap_angle;
@@ -138,34 +139,16 @@ fn normalized_residual(
     libm::fabs(p.range * cos_d - fit.r) / libm::sqrt(var.max(VARIANCE_FLOOR * noise.range_var))
 }
 
-/// The unweighted total-least-squares line through the centroid: with the centred
-/// second moments `s_xx, s_yy, s_xy`, `ψ = ½ atan2(−2 s_xy, s_yy − s_xx)` and
-/// `r = x̄ cos ψ + ȳ sin ψ` (r may be negative here). Sums are taken relative to the
-/// first point for numerical stability.
+/// The unweighted total-least-squares line of `points` (see [`Moments::line`]), with
+/// the sums taken relative to the first point for numerical stability.
 fn total_least_squares(points: &[ScanPoint]) -> Option<(f64, f64)> {
     let origin = points.first()?;
-    if points.len() < 2 {
-        return None;
-    }
-    let (mut sx, mut sy, mut sxx, mut syy, mut sxy) = (0.0, 0.0, 0.0, 0.0, 0.0);
-    for p in points {
-        let (x, y) = (p.x - origin.x, p.y - origin.y);
-        sx += x;
-        sy += y;
-        sxx += x * x;
-        syy += y * y;
-        sxy += x * y;
-    }
-    let n = points.len() as f64;
-    let (mx, my) = (sx / n, sy / n);
-    let (cxx, cyy, cxy) = (sxx - n * mx * mx, syy - n * my * my, sxy - n * mx * my);
-    let spread = cxx + cyy;
-    if spread.is_nan() || spread <= 0.0 {
-        return None;
-    }
-    let psi = 0.5 * libm::atan2(-2.0 * cxy, cyy - cxx);
-    let (s, c) = libm::sincos(psi);
-    Some(((origin.x + mx) * c + (origin.y + my) * s, psi))
+    points
+        .iter()
+        .fold(Moments::default(), |m, p| {
+            m.plus(p.x - origin.x, p.y - origin.y)
+        })
+        .line((origin.x, origin.y))
 }
 
 /// `J = Σ w_i g_i g_iᵀ` and the gradient half `b = Σ w_i g_i d_i` at `(r, ψ)`; the

@@ -12,6 +12,7 @@ mod error;
 mod extractor;
 mod fit;
 mod merge;
+mod moments;
 mod params;
 mod points;
 mod split;

@@ -2,8 +2,10 @@
 //! scans of the same geometry, and the cut of the points into runs at invalid beams and
 //! range gaps.
 
+use super::moments::Moments;
 use crate::LaserScan;
 use alloc::vec::Vec;
+use core::ops::Range;
 
 /// A valid reading as a point: `(x, y) = ρ (cos φ, sin φ)` in the sensor frame, keeping
 /// `ρ` and `(cos φ, sin φ)` for the weighted fit.
@@ -47,21 +49,44 @@ impl BeamTable {
 
 /// A maximal stretch of consecutive valid beams whose neighbouring points are at most
 /// `max_gap` apart: `points[start..end]`.
-pub(crate) type Run = core::ops::Range<usize>;
+pub(crate) type Run = Range<usize>;
 
-/// Clears `points` and `runs`, then converts the valid readings of `scan` (in beam order)
-/// to points and cuts them into runs at every invalid beam and wherever consecutive points
-/// are more than `max_gap` apart. `table` must be up to date for `scan`.
-pub(crate) fn collect(
-    scan: &LaserScan<'_>,
-    table: &BeamTable,
-    max_gap: f64,
-    points: &mut Vec<ScanPoint>,
-    runs: &mut Vec<Run>,
-) {
+/// The valid points of a scan, cut into runs, with prefix sums of their moments.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct ScanPoints {
+    /// The points in beam order.
+    pub points: Vec<ScanPoint>,
+    /// Runs of points, in order, tiling `points`.
+    pub runs: Vec<Run>,
+    /// `sums[i]`: moments of points `0..i`, each relative to the first point of its run,
+    /// so `sums[j] − sums[i]` gives the moments of `i..j` within one run in O(1).
+    pub sums: Vec<Moments>,
+}
+
+impl ScanPoints {
+    /// The total-least-squares line `(r, ψ)` of `points[range]`, a stretch inside `run`,
+    /// from the prefix sums in O(1).
+    pub fn line(&self, run: &Run, range: Range<usize>) -> Option<(f64, f64)> {
+        let origin = self.points.get(run.start)?;
+        self.moments(range)?.line((origin.x, origin.y))
+    }
+
+    /// The moments of `points[range]`, a stretch inside one run, in O(1).
+    pub fn moments(&self, range: Range<usize>) -> Option<Moments> {
+        Some(*self.sums.get(range.end)? - *self.sums.get(range.start)?)
+    }
+}
+
+/// Refills `out` with the valid readings of `scan` (in beam order) as points, cut into
+/// runs at every invalid beam and wherever consecutive points are more than `max_gap`
+/// apart. `table` must be up to date for `scan`.
+pub(crate) fn collect(scan: &LaserScan<'_>, table: &BeamTable, max_gap: f64, out: &mut ScanPoints) {
+    let ScanPoints { points, runs, sums } = out;
     points.clear();
     runs.clear();
+    sums.clear();
     points.reserve(scan.ranges.len());
+    sums.reserve(scan.ranges.len() + 1);
     let max_gap_sq = max_gap * max_gap;
     let mut run_start = 0;
     // The previous beam's point, if that beam was valid.
@@ -91,6 +116,19 @@ pub(crate) fn collect(
         previous = Some((x, y));
     }
     close_run(runs, run_start, points.len());
+    // A second, simple loop keeps the first one's registers free.
+    let mut sum = Moments::default();
+    sums.push(sum);
+    for run in runs.iter() {
+        let Some(run_points) = points.get(run.clone()) else {
+            continue;
+        };
+        let (ox, oy) = run_points.first().map_or((0.0, 0.0), |o| (o.x, o.y));
+        for p in run_points {
+            sum = sum.plus(p.x - ox, p.y - oy);
+            sums.push(sum);
+        }
+    }
 }
 
 /// Squared Euclidean distance between two points (m²).
@@ -122,11 +160,16 @@ mod tests {
         };
         let mut table = BeamTable::default();
         table.update(&scan);
-        let (mut points, mut runs) = (Vec::new(), Vec::new());
-        collect(&scan, &table, 0.3, &mut points, &mut runs);
-        assert_eq!(points.len(), 6);
-        assert_eq!(runs, [0..2, 2..4, 4..6]);
-        assert!((points[5].x - 3.0 * 0.06_f64.cos()).abs() < 1e-6);
-        assert!((points[5].y - 3.0 * 0.06_f64.sin()).abs() < 1e-6);
+        let mut out = ScanPoints::default();
+        collect(&scan, &table, 0.3, &mut out);
+        assert_eq!(out.points.len(), 6);
+        assert_eq!(out.runs, [0..2, 2..4, 4..6]);
+        assert_eq!(out.sums.len(), 7);
+        let p = out.points[5];
+        assert!((p.x - 3.0 * 0.06_f64.cos()).abs() < 1e-6);
+        assert!((p.y - 3.0 * 0.06_f64.sin()).abs() < 1e-6);
+        // The last run is two points at 3 m, 0.01 rad apart: its line from the sums.
+        let (r, psi) = out.line(&out.runs[2].clone(), 4..6).unwrap();
+        assert!((psi - 0.055).abs() < 1e-6 && (r - 3.0 * 0.005_f64.cos()).abs() < 1e-6);
     }
 }

@@ -1,43 +1,109 @@
 //! The split step of split-and-merge (iterative end-point fit): a run of points is cut at
 //! the point farthest from the chord between its end points until every piece is straight.
 
-use super::points::{Run, ScanPoint};
+use super::points::{Run, ScanPoint, ScanPoints};
 use alloc::vec::Vec;
+use core::ops::Range;
 
-/// Splits every run in `runs` into straight segments, appended to `segments` in scan
+/// Splits every run of `scan` into straight segments, appended to `segments` in scan
 /// order. A range `points[s..e]` is split at `k`, the point with the largest distance
 /// `|n·(p_k − p_s)|` from the chord `p_s → p_{e−1}` (`n` its unit normal), when that
 /// distance exceeds `split_distance`; the pieces are `s..k` and `k+1..e` (the split
-/// point, usually a corner, is in neither). Pieces with fewer than `min_points` points
-/// are dropped. `stack` is scratch space (an explicit stack instead of recursion).
+/// point, usually a corner, is in neither), after [`refine_split`] has moved `k` to where
+/// the points change sides. Pieces with fewer than `min_points` points are dropped.
+/// `stack` is scratch space (an explicit stack instead of recursion).
 pub(crate) fn split_runs(
-    points: &[ScanPoint],
-    runs: &[Run],
+    scan: &ScanPoints,
     split_distance: f64,
     min_points: usize,
     stack: &mut Vec<Run>,
     segments: &mut Vec<Run>,
 ) {
-    for run in runs {
+    for run in &scan.runs {
         stack.clear();
         stack.push(run.clone());
         while let Some(range) = stack.pop() {
             if range.len() < min_points {
                 continue;
             }
-            let Some(seg) = points.get(range.clone()) else {
+            let Some(seg) = scan.points.get(range.clone()) else {
                 continue;
             };
             match farthest_from_chord(seg) {
                 Some((k, d)) if d > split_distance => {
+                    let k = refine_split(scan, run, range.clone(), range.start + k, split_distance);
                     // Right piece first so the left one is popped (and emitted) first.
-                    stack.push(range.start + k + 1..range.end);
-                    stack.push(range.start..range.start + k);
+                    stack.push(k + 1..range.end);
+                    stack.push(range.start..k);
                 }
                 _ => segments.push(range),
             }
         }
     }
+}
+
+/// Moves the split point `k` of `range` (inside `run`) to where the points change from
+/// being nearer the total-least-squares line of `range.start..k` to being nearer that of
+/// `k+1..range.end` (both from the prefix sums, O(1)). The farthest point from a chord is
+/// only near a corner as far as the noise allows; left alone, a few points of one wall
+/// end up at the end of the other and bias its fit. Each piece keeps at least half its
+/// points.
+fn refine_split(
+    scan: &ScanPoints,
+    run: &Run,
+    range: Range<usize>,
+    k: usize,
+    split_distance: f64,
+) -> usize {
+    // Only between two pieces that are already lines; a piece still holding a corner
+    // has a meaningless total-least-squares line.
+    let straight = |r: Range<usize>| {
+        scan.moments(r).is_some_and(|m| {
+            m.mean_squared_residual() <= STRAIGHT_FRACTION * split_distance * split_distance
+        })
+    };
+    if !straight(range.start..k) || !straight(k + 1..range.end) {
+        return k;
+    }
+    let (Some(left), Some(right)) = (
+        scan.line(run, range.start..k),
+        scan.line(run, k + 1..range.end),
+    ) else {
+        return k;
+    };
+    let (left, right) = (normal_form(left), normal_form(right));
+    let nearer = |i: usize, to: (f64, f64, f64), other: (f64, f64, f64)| {
+        scan.points
+            .get(i)
+            .is_some_and(|p| distance(p, to) < distance(p, other))
+    };
+    let lowest = range.start + (k - range.start).div_ceil(2);
+    let highest = range.end - (range.end - k - 1).div_ceil(2);
+    let mut split = k;
+    while split > lowest && nearer(split - 1, right, left) {
+        split -= 1;
+    }
+    if split == k {
+        while split + 1 < highest && nearer(split + 1, left, right) {
+            split += 1;
+        }
+    }
+    split
+}
+
+/// A piece counts as straight for [`refine_split`] when its mean squared residual is
+/// below this fraction of `split_distance²` (rms below a third of it).
+const STRAIGHT_FRACTION: f64 = 1.0 / 9.0;
+
+/// `(r, ψ)` as `(r, cos ψ, sin ψ)`.
+fn normal_form((r, psi): (f64, f64)) -> (f64, f64, f64) {
+    let (s, c) = libm::sincos(psi);
+    (r, c, s)
+}
+
+/// Unsigned distance of a point from the line `(r, cos ψ, sin ψ)`.
+fn distance(p: &ScanPoint, (r, c, s): (f64, f64, f64)) -> f64 {
+    libm::fabs(p.x * c + p.y * s - r)
 }
 
 /// Index (within `seg`) and distance of the point farthest from the chord through the
@@ -73,6 +139,8 @@ fn farthest_from_chord(seg: &[ScanPoint]) -> Option<(usize, f64)> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::extract::moments::Moments;
+    use alloc::vec;
 
     fn pt(x: f64, y: f64) -> ScanPoint {
         let range = libm::hypot(x, y);
@@ -85,15 +153,32 @@ mod tests {
         }
     }
 
+    /// Points cut into the given runs, with their prefix sums.
+    fn scan_points(points: Vec<ScanPoint>, runs: &[Run]) -> ScanPoints {
+        let mut sums = vec![Moments::default()];
+        for run in runs {
+            let o = points[run.start];
+            for p in &points[run.clone()] {
+                let last = *sums.last().unwrap();
+                sums.push(last.plus(p.x - o.x, p.y - o.y));
+            }
+        }
+        ScanPoints {
+            points,
+            runs: runs.to_vec(),
+            sums,
+        }
+    }
+
     #[test]
     fn splits_a_corner_and_keeps_order() {
         // An L: 10 points along the wall y = 2 (x from 3 down to 0.3), then 10 along the
         // wall x = −0.3 (y from 2 down to −0.25).
         let mut points: Vec<ScanPoint> = (0..10).map(|i| pt(3.0 - 0.3 * i as f64, 2.0)).collect();
         points.extend((0..10).map(|i| pt(-0.3, 2.0 - 0.25 * i as f64)));
+        let scan = scan_points(points.clone(), &[Run { start: 0, end: 20 }]);
         let (mut stack, mut segments) = (Vec::new(), Vec::new());
-        let whole = [Run { start: 0, end: 20 }];
-        split_runs(&points, &whole, 0.05, 3, &mut stack, &mut segments);
+        split_runs(&scan, 0.05, 3, &mut stack, &mut segments);
         assert_eq!(segments.len(), 2, "{segments:?}");
         assert!(segments[0].end <= segments[1].start);
         for s in &segments {
@@ -103,9 +188,10 @@ mod tests {
 
     #[test]
     fn short_and_degenerate_runs() {
-        let points = [pt(1.0, 0.0), pt(1.0, 0.0), pt(1.0, 0.0)];
+        let points = vec![pt(1.0, 0.0), pt(1.0, 0.0), pt(1.0, 0.0), pt(2.0, 0.0)];
+        let scan = scan_points(points.clone(), &[0..3, 3..4]);
         let (mut stack, mut segments) = (Vec::new(), Vec::new());
-        split_runs(&points, &[0..3, 0..1], 0.05, 2, &mut stack, &mut segments);
+        split_runs(&scan, 0.05, 2, &mut stack, &mut segments);
         assert_eq!(segments.len(), 1);
         assert_eq!(segments[0], 0..3);
         assert_eq!(farthest_from_chord(&points[..2]), None);
