@@ -3,7 +3,7 @@
 mod localizer_sim;
 mod matching_support;
 
-use ekf_core::{angle_diff, DiffDrive, Pose2};
+use ekf_core::{angle_diff, DiffDrive, Motion, Pose2};
 use localizer_sim::{commands, measured, mount, ranges, scan, start, walls};
 use lrf_lines::{
     CompassConfig, ExtractionError, ExtractionParams, LineMap, Localizer, LocalizerConfig,
@@ -265,4 +265,30 @@ fn config_files_may_omit_groups_and_fields() {
     assert!((CompassConfig::paper().variance - 3.046e-6).abs() < 1e-9);
     let text = serde_json::to_string(&d).unwrap();
     assert_eq!(serde_json::from_str::<LocalizerConfig>(&text).unwrap(), d);
+}
+
+#[test]
+fn odometry_prediction_moves_the_pose_and_grows_the_covariance() {
+    let mut localizer =
+        Localizer::new(config(), start(), initial_covariance(), map_of(&walls())).unwrap();
+    let p0 = *localizer.covariance();
+    localizer
+        .predict_odometry(&Motion::new(0.5, 0.1).unwrap())
+        .unwrap();
+    // Along the mid-angle heading 0.05 rad.
+    let pose = localizer.pose();
+    assert!((pose.x - (0.5 + 0.5 * 0.05_f64.cos())).abs() < 1e-12);
+    assert!((pose.y - (0.5 + 0.5 * 0.05_f64.sin())).abs() < 1e-12);
+    assert!((pose.theta - 0.1).abs() < 1e-12);
+    assert!(localizer.covariance()[(0, 0)] > p0[(0, 0)]);
+    assert_eq!(localizer.sensor_pose(), pose.compose(&mount()));
+    let nan = Motion {
+        ds: f64::NAN,
+        dtheta: 0.0,
+    };
+    assert!(matches!(
+        localizer.predict_odometry(&nan),
+        Err(LocalizerError::Filter(_))
+    ));
+    assert_eq!(localizer.pose(), pose);
 }

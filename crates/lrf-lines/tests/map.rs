@@ -286,3 +286,45 @@ proptest! {
         }
     }
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(100))]
+
+    #[test]
+    fn building_a_map_from_random_sightings_never_panics(
+        scans in proptest::collection::vec(
+            (
+                (-5.0..5.0, -5.0..5.0, -PI..PI),
+                proptest::collection::vec((0.0..8.0, -PI..PI, -8.0..8.0, -8.0..8.0, -8.0..8.0, -8.0..8.0), 0..8),
+            ),
+            0..6,
+        ),
+        max_gap in 0.0..1.0,
+    ) {
+        let scans: Vec<(Vec<lrf_lines::ObservedLine>, Pose2<f64>)> = scans
+            .into_iter()
+            .map(|((x, y, t), lines)| {
+                let lines = lines
+                    .into_iter()
+                    .map(|(r, psi, x0, y0, x1, y1)| {
+                        let line = ekf_core::Line::new(r, psi).unwrap();
+                        lrf_lines::ObservedLine {
+                            line,
+                            covariance: nalgebra::Matrix2::new(1e-4, 0.0, 0.0, 1e-4),
+                            start: line.project(&Point2::new(x0, y0)),
+                            end: line.project(&Point2::new(x1, y1)),
+                            num_points: 10,
+                        }
+                    })
+                    .collect();
+                (lines, Pose2::new(x, y, t))
+            })
+            .collect();
+        let params = MapBuilderParams { max_gap, ..MapBuilderParams::default() };
+        let map = LineMap::from_run(scans.iter().map(|(l, p)| (l.as_slice(), *p)), &params).unwrap();
+        let total: usize = scans.iter().map(|(l, _)| l.len()).sum();
+        prop_assert!(map.len() <= total);
+        // Whatever was built can be saved and loaded back unchanged.
+        prop_assert_eq!(LineMap::from_json(&map.to_json().unwrap()).unwrap(), map);
+    }
+}

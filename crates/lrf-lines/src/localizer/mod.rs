@@ -218,7 +218,6 @@ impl Localizer {
             extracted: self.lines.len(),
             ..ScanReport::default()
         };
-        let mount = self.config.laser_mount;
         if self.build_map_from_next_scan {
             self.map = LineMap::from_scan(&self.lines, &self.sensor_pose())
                 .map_err(LocalizerError::Filter)?;
@@ -227,11 +226,27 @@ impl Localizer {
             report.map_built = true;
             return Ok(report);
         }
-        self.matcher
-            .match_lines(&self.lines, &self.map, &self.ekf, &mount, &mut self.matches);
+        self.matcher.match_lines(
+            &self.lines,
+            &self.map,
+            &self.ekf,
+            &self.config.laser_mount,
+            &mut self.matches,
+        );
         report.matched = self.matches.matches().len();
         report.rejected = self.matches.rejections().len();
         let before = self.ekf;
+        if let Err(e) = self.fuse_matches(&mut report) {
+            self.ekf = before;
+            self.fusions.clear();
+            return Err(LocalizerError::Filter(e));
+        }
+        Ok(report)
+    }
+
+    /// Step 3 of a scan update: fuses the matches in order, each re-linearised at the
+    /// current state and re-gated; counts and records what happened to each.
+    fn fuse_matches(&mut self, report: &mut ScanReport) -> Result<(), ekf_core::Error> {
         for m in self.matches.matches() {
             let (Some(line), Some(wall)) =
                 (self.lines.get(m.observed), self.map.segments.get(m.map))
@@ -242,16 +257,9 @@ impl Localizer {
                 observed: line.line,
                 covariance: line.covariance,
                 map_line: wall.line,
-                mount,
+                mount: self.config.laser_mount,
             };
-            let outcome = match self.ekf.update(&model, Some(self.matcher.gate())) {
-                Ok(outcome) => outcome,
-                Err(e) => {
-                    self.ekf = before;
-                    self.fusions.clear();
-                    return Err(LocalizerError::Filter(e));
-                }
-            };
+            let outcome = self.ekf.update(&model, Some(self.matcher.gate()))?;
             if outcome.accepted {
                 report.fused += 1;
             } else {
@@ -264,7 +272,7 @@ impl Localizer {
                 accepted: outcome.accepted,
             });
         }
-        Ok(report)
+        Ok(())
     }
 
     /// Empties the match result (after a scan that was not matched).
