@@ -278,7 +278,6 @@ impl Config {
             .validated()
             .map_err(|e| invalid("localizer.odometry_noise", &e.to_string()))?;
         l.extraction
-            .clone()
             .validated()
             .map_err(|e| invalid("localizer.extraction", &e.to_string()))?;
         Ok(self)

@@ -8,6 +8,7 @@ pub mod eval;
 pub mod import;
 pub mod mcap_io;
 pub mod plot;
+pub mod replay;
 pub mod ros2;
 pub mod trajectory;
 pub mod tum;

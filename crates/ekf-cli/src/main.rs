@@ -5,7 +5,10 @@
 use clap::ValueEnum;
 use clap::{Parser, Subcommand};
 use ekf_cli::commands::{evaluate, import};
+use ekf_cli::config::{Config, DEFAULT_TOML};
 use ekf_cli::import::{CarmenFlavour, CarmenOptions, SyntheticCompass};
+use ekf_cli::replay::{self, Mode, ReplayOptions};
+use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -19,6 +22,35 @@ struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
+    /// Run the filter over a ROS 2 bag (MCAP): a trajectory (TUM), an MCAP for Foxglove
+    /// and ROS 2 tools, and a summary (with accuracy when the log has a reference).
+    Replay {
+        /// The ROS 2 bag (.mcap).
+        log: PathBuf,
+        /// Configuration file (TOML); `ekf config` prints the defaults.
+        #[arg(long)]
+        config: Option<PathBuf>,
+        /// Line map (JSON). Without it the map is built from the first scan, as in the paper.
+        #[arg(long)]
+        map: Option<PathBuf>,
+        /// Which sensors the filter uses (the paper's four configurations).
+        #[arg(long, value_enum, default_value_t = CliMode::LaserCompass)]
+        mode: CliMode,
+        /// Start at the log's first reference pose instead of the configured initial pose.
+        #[arg(long)]
+        init_from_truth: bool,
+        /// Write the estimate, lines, map and diagnostics to this MCAP.
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Write the trajectory as TUM text (what evo reads).
+        #[arg(long)]
+        tum: Option<PathBuf>,
+        /// Print the summary as one JSON object.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Print the documented default configuration (TOML).
+    Config,
     /// Convert a CARMEN or MRPT text log into a ROS 2 bag (MCAP) with /odom, /scan,
     /// /tf_static, /ground_truth (corrected CARMEN logs) and optionally a synthetic /compass.
     Import {
@@ -83,6 +115,76 @@ enum ImportFormat {
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
+enum CliMode {
+    Odometry,
+    Compass,
+    Laser,
+    #[value(name = "laser+compass")]
+    LaserCompass,
+}
+
+impl From<CliMode> for Mode {
+    fn from(m: CliMode) -> Self {
+        match m {
+            CliMode::Odometry => Mode::Odometry,
+            CliMode::Compass => Mode::Compass,
+            CliMode::Laser => Mode::Laser,
+            CliMode::LaserCompass => Mode::LaserCompass,
+        }
+    }
+}
+
+fn load_config(path: Option<&std::path::Path>) -> Result<Config, Box<dyn std::error::Error>> {
+    Ok(match path {
+        Some(p) => Config::load(p)?,
+        None => Config::default(),
+    })
+}
+
+/// A progress bar on stderr when it is a terminal; nothing otherwise.
+fn progress_bar() -> Option<indicatif::ProgressBar> {
+    std::io::stderr().is_terminal().then(|| {
+        let bar = indicatif::ProgressBar::new(0);
+        bar.set_style(
+            indicatif::ProgressStyle::with_template("{bar:40} {pos}/{len} messages {eta}")
+                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        );
+        bar
+    })
+}
+
+fn print_replay_table(s: &replay::ReplaySummary) {
+    println!(
+        "{} ({}, map: {}, {} segments)",
+        s.log, s.mode, s.map, s.map_segments
+    );
+    println!(
+        "  motion steps {}, poses written {}, scans {} (used {})",
+        s.motion_steps, s.poses_written, s.lines.scans, s.lines.scans_used
+    );
+    println!(
+        "  lines: extracted {}, matched {}, rejected {}, fused {}, refused {}",
+        s.lines.extracted, s.lines.matched, s.lines.rejected, s.lines.fused, s.lines.refused
+    );
+    println!(
+        "  compass: fused {}, rejected {}",
+        s.compass.accepted, s.compass.rejected
+    );
+    if let Some(a) = &s.accuracy {
+        println!("  accuracy vs reference ({} poses): position RMSE {:.3} m (max {:.3} m), heading RMSE {:.2}°", a.matched_poses, a.position_rmse_m, a.position_max_m, a.heading_rmse_deg);
+    }
+    let t = &s.timings;
+    println!("  per scan (median/p99 µs): extraction {:.1}/{:.1}, matching {:.1}/{:.1}, update {:.1}/{:.1}", t.extraction.median_us, t.extraction.p99_us, t.matching.median_us, t.matching.p99_us, t.update.median_us, t.update.p99_us);
+    if s.warning_count > 0 {
+        println!(
+            "  {} messages skipped, e.g. {} at {} ns: {}",
+            s.warning_count, s.warnings[0].topic, s.warnings[0].log_time_ns, s.warnings[0].reason
+        );
+    }
+    println!("  wall time {:.2} s", s.wall_time_s);
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
 enum Flavour {
     Auto,
     Corrected,
@@ -114,6 +216,45 @@ fn print_import(
 
 fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
     match cli.command {
+        Command::Config => print!("{DEFAULT_TOML}"),
+        Command::Replay {
+            log,
+            config,
+            map,
+            mode,
+            init_from_truth,
+            out,
+            tum,
+            json,
+        } => {
+            let config = load_config(config.as_deref())?;
+            let options = ReplayOptions {
+                mode: mode.into(),
+                map,
+                init_from_truth,
+                out_mcap: out,
+                tum,
+            };
+            let bar = progress_bar();
+            let mut progress = |done: u64, total: u64| {
+                if let Some(b) = &bar {
+                    b.set_length(total);
+                    b.set_position(done);
+                }
+            };
+            let outcome = replay::replay(&log, &config, &options, &mut progress)?;
+            if let Some(b) = bar {
+                b.finish_and_clear();
+            }
+            if json {
+                println!("{}", serde_json::to_string_pretty(&outcome.summary)?);
+            } else {
+                print_replay_table(&outcome.summary);
+            }
+            if let Some(failure) = outcome.failure {
+                return Err(failure.into());
+            }
+        }
         Command::Import {
             format:
                 ImportFormat::Carmen {

@@ -49,6 +49,27 @@ pub struct ScanReport {
     pub map_built: bool,
 }
 
+/// A stage of [`Localizer::update_scan_timed`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ScanStage {
+    /// Line extraction from the scan.
+    Extraction,
+    /// Data association with the map.
+    Matching,
+    /// The sequential EKF update with the matched lines.
+    Update,
+}
+
+/// Told when each stage of a scan update ends; `()` ignores it.
+pub trait StageClock {
+    /// `stage` has just finished.
+    fn stage_done(&mut self, stage: ScanStage);
+}
+
+impl StageClock for () {
+    fn stage_done(&mut self, _stage: ScanStage) {}
+}
+
 /// The localization step for one robot: an [`Ekf`] plus a line map, a [`LineExtractor`],
 /// a [`Matcher`] and the buffers they reuse, so that after the first scans no step
 /// allocates.
@@ -198,8 +219,17 @@ impl Localizer {
     /// variance, if its `NIS = wrap(φ − θ)² / (P_θθ + σ²)` passes the 1-dof gate. A
     /// rejected heading leaves the state unchanged (`accepted == false`).
     pub fn update_compass(&mut self, heading: f64) -> Result<UpdateOutcome<f64>, LocalizerError> {
-        let compass =
-            Compass::new(heading, self.config.compass.variance).map_err(LocalizerError::Filter)?;
+        self.update_compass_with_variance(heading, self.config.compass.variance)
+    }
+
+    /// As [`update_compass`](Self::update_compass), with this reading's own variance
+    /// (rad²), e.g. a ROS `Imu`'s `orientation_covariance[8]`.
+    pub fn update_compass_with_variance(
+        &mut self,
+        heading: f64,
+        variance: f64,
+    ) -> Result<UpdateOutcome<f64>, LocalizerError> {
+        let compass = Compass::new(heading, variance).map_err(LocalizerError::Filter)?;
         self.ekf
             .update(&compass, Some(&self.compass_gate))
             .map_err(LocalizerError::Filter)
@@ -209,8 +239,21 @@ impl Localizer {
     /// type's documentation). Fails only on an invalid scan header or a non-finite
     /// result; the state is then as before the call.
     pub fn update_scan(&mut self, scan: &LaserScan<'_>) -> Result<ScanReport, LocalizerError> {
+        self.update_scan_timed(scan, &mut ())
+    }
+
+    /// [`update_scan`](Self::update_scan), telling `clock` when each stage ends, so a
+    /// caller with a clock (this crate has none) can time extraction, matching and the
+    /// update separately.
+    pub fn update_scan_timed(
+        &mut self,
+        scan: &LaserScan<'_>,
+        clock: &mut impl StageClock,
+    ) -> Result<ScanReport, LocalizerError> {
         self.fusions.clear();
-        if let Err(e) = self.extractor.extract(scan, &mut self.lines) {
+        let extracted = self.extractor.extract(scan, &mut self.lines);
+        clock.stage_done(ScanStage::Extraction);
+        if let Err(e) = extracted {
             self.clear_matches();
             return Err(e.into());
         }
@@ -233,10 +276,13 @@ impl Localizer {
             &self.config.laser_mount,
             &mut self.matches,
         );
+        clock.stage_done(ScanStage::Matching);
         report.matched = self.matches.matches().len();
         report.rejected = self.matches.rejections().len();
         let before = self.ekf;
-        if let Err(e) = self.fuse_matches(&mut report) {
+        let fused = self.fuse_matches(&mut report);
+        clock.stage_done(ScanStage::Update);
+        if let Err(e) = fused {
             self.ekf = before;
             self.fusions.clear();
             return Err(LocalizerError::Filter(e));
@@ -294,6 +340,19 @@ impl Localizer {
     /// The covariance `P` of `(x, y, θ)`.
     pub fn covariance(&self) -> &Matrix3<f64> {
         self.ekf.covariance()
+    }
+
+    /// Replaces the laser's mounting pose (e.g. once it is known from a log's
+    /// `/tf_static`). Fails, leaving the old one, if it is not finite.
+    pub fn set_laser_mount(&mut self, mount: Pose2<f64>) -> Result<(), LocalizerError> {
+        self.config.laser_mount =
+            mount
+                .validated("laser mount")
+                .map_err(|error| LocalizerError::Config {
+                    group: "laser_mount",
+                    error,
+                })?;
+        Ok(())
     }
 
     /// The laser's pose in the world: pose ⊕ laser mount. Observed lines and their end

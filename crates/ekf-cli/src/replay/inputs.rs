@@ -1,0 +1,403 @@
+//! Turns ROS 2 messages into filter inputs: wheel speeds from joint states, motion from
+//! odometry poses, headings from `Imu` / `MagneticField`, reference poses, and the laser's
+//! mounting pose from `/tf_static`.
+
+use crate::config::CompassCalibrationConfig;
+use crate::ros2::geometry_msgs::{Pose, TransformStamped};
+use crate::ros2::sensor_msgs::{Imu, JointState, MagneticField};
+use ekf_core::{heading_from_compass_bearing, wrap_angle, Motion, Pose2, WheelSpeeds};
+
+/// Why one message could not be used; the replay counts it as a warning and goes on.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Skip {
+    /// The stamp is not after the previous one on the same topic.
+    TimeNotIncreasing {
+        /// Previous stamp (ns).
+        previous_ns: u64,
+        /// This stamp (ns).
+        stamp_ns: u64,
+    },
+    /// A field is NaN or infinite.
+    NonFinite {
+        /// The field.
+        field: &'static str,
+    },
+    /// The first message of a differentiated or delta stream only sets the start.
+    First,
+}
+
+impl std::fmt::Display for Skip {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Skip::TimeNotIncreasing {
+                previous_ns,
+                stamp_ns,
+            } if previous_ns == stamp_ns => {
+                write!(f, "duplicate stamp {stamp_ns} ns")
+            }
+            Skip::TimeNotIncreasing {
+                previous_ns,
+                stamp_ns,
+            } => {
+                write!(
+                    f,
+                    "time going backwards: stamp {stamp_ns} ns after {previous_ns} ns"
+                )
+            }
+            Skip::NonFinite { field } => write!(f, "{field} is not finite"),
+            Skip::First => write!(f, "first message sets the start"),
+        }
+    }
+}
+
+/// Wheel speeds from `sensor_msgs/JointState`: `velocity` when present, else the
+/// difference of `position` over the stamp difference.
+#[derive(Debug, Clone)]
+pub struct WheelTracker {
+    left: String,
+    right: String,
+    previous: Option<(u64, f64, f64)>,
+}
+
+impl WheelTracker {
+    /// Tracks the joints named `left` and `right`.
+    pub fn new(left: &str, right: &str) -> Self {
+        Self {
+            left: left.into(),
+            right: right.into(),
+            previous: None,
+        }
+    }
+
+    /// Wheel speeds over the interval ending at this message. `Err(names)` when the message
+    /// lacks one of the joints (the names it has); `Ok(Err(skip))` when it cannot be used.
+    pub fn speeds(
+        &mut self,
+        stamp_ns: u64,
+        msg: &JointState,
+    ) -> Result<Result<WheelSpeeds<f64>, Skip>, Vec<String>> {
+        let find = |name: &str| msg.name.iter().position(|n| n == name);
+        let (Some(l), Some(r)) = (find(&self.left), find(&self.right)) else {
+            return Err(msg.name.clone());
+        };
+        let (Some(&pl), Some(&pr)) = (msg.position.get(l), msg.position.get(r)) else {
+            return Ok(self.speeds_from_velocity_only(stamp_ns, msg, l, r));
+        };
+        if !(pl.is_finite() && pr.is_finite()) {
+            return Ok(Err(Skip::NonFinite { field: "position" }));
+        }
+        let previous = self.previous.replace((stamp_ns, pl, pr));
+        let Some((t0, pl0, pr0)) = previous else {
+            return Ok(Err(Skip::First));
+        };
+        if stamp_ns <= t0 {
+            self.previous = Some((t0, pl0, pr0));
+            return Ok(Err(Skip::TimeNotIncreasing {
+                previous_ns: t0,
+                stamp_ns,
+            }));
+        }
+        let dt = (stamp_ns - t0) as f64 * 1e-9;
+        let velocity = (msg.velocity.get(l).copied(), msg.velocity.get(r).copied());
+        Ok(match velocity {
+            (Some(vl), Some(vr)) if vl.is_finite() && vr.is_finite() => {
+                WheelSpeeds::new(vl, vr, dt).map_err(|_| Skip::NonFinite { field: "velocity" })
+            }
+            (Some(_), Some(_)) => Err(Skip::NonFinite { field: "velocity" }),
+            _ => WheelSpeeds::from_increments(pl - pl0, pr - pr0, dt)
+                .map_err(|_| Skip::NonFinite { field: "position" }),
+        })
+    }
+
+    /// A message with velocities but no positions: the interval is the stamp difference.
+    fn speeds_from_velocity_only(
+        &mut self,
+        stamp_ns: u64,
+        msg: &JointState,
+        l: usize,
+        r: usize,
+    ) -> Result<WheelSpeeds<f64>, Skip> {
+        let (Some(&vl), Some(&vr)) = (msg.velocity.get(l), msg.velocity.get(r)) else {
+            return Err(Skip::NonFinite {
+                field: "velocity (missing)",
+            });
+        };
+        let previous = self.previous.replace((stamp_ns, 0.0, 0.0));
+        let Some((t0, _, _)) = previous else {
+            return Err(Skip::First);
+        };
+        if stamp_ns <= t0 {
+            self.previous = previous;
+            return Err(Skip::TimeNotIncreasing {
+                previous_ns: t0,
+                stamp_ns,
+            });
+        }
+        WheelSpeeds::new(vl, vr, (stamp_ns - t0) as f64 * 1e-9)
+            .map_err(|_| Skip::NonFinite { field: "velocity" })
+    }
+}
+
+/// Motion steps from consecutive `nav_msgs/Odometry` poses.
+#[derive(Debug, Clone, Default)]
+pub struct OdometryTracker {
+    previous: Option<(u64, Pose2<f64>)>,
+}
+
+impl OdometryTracker {
+    /// The motion from the previous odometry pose to this one.
+    pub fn motion(&mut self, stamp_ns: u64, pose: &Pose) -> Result<Motion<f64>, Skip> {
+        let pose = pose2(pose).ok_or(Skip::NonFinite { field: "pose" })?;
+        let Some((t0, p0)) = self.previous else {
+            self.previous = Some((stamp_ns, pose));
+            return Err(Skip::First);
+        };
+        if stamp_ns <= t0 {
+            return Err(Skip::TimeNotIncreasing {
+                previous_ns: t0,
+                stamp_ns,
+            });
+        }
+        self.previous = Some((stamp_ns, pose));
+        Motion::from_odometry_poses(&p0, &pose).map_err(|_| Skip::NonFinite { field: "pose" })
+    }
+}
+
+/// A `geometry_msgs/Pose` as a planar pose (yaw of the quaternion); `None` if not finite.
+pub fn pose2(p: &Pose) -> Option<Pose2<f64>> {
+    let pose = Pose2::new(p.position.x, p.position.y, p.orientation.yaw());
+    pose.validated("pose").ok()
+}
+
+/// A heading reading (rad, map frame) and its variance, if the message gives one.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Heading {
+    /// Heading in the map frame (rad).
+    pub heading: f64,
+    /// The message's own variance (rad²), when it states one.
+    pub variance: Option<f64>,
+}
+
+/// An `Imu`'s yaw (already ENU) rotated into the map frame; its variance from
+/// `orientation_covariance[8]` unless the covariance is "not provided" (−1 in element 0)
+/// or not positive.
+pub fn heading_from_imu(
+    msg: &Imu,
+    calibration: &CompassCalibrationConfig,
+) -> Result<Heading, Skip> {
+    let yaw = msg.orientation.yaw();
+    if !yaw.is_finite() {
+        return Err(Skip::NonFinite {
+            field: "orientation",
+        });
+    }
+    let c = &msg.orientation_covariance;
+    let variance = (c[0] != -1.0 && c[8].is_finite() && c[8] > 0.0).then_some(c[8]);
+    Ok(Heading {
+        heading: wrap_angle(yaw + calibration.map_offset),
+        variance,
+    })
+}
+
+/// A calibrated magnetometer reading: the field's horizontal direction in the robot frame
+/// is magnetic north, so the bearing (clockwise from magnetic north) is
+/// `atan2(m_y, m_x)`, and the map heading follows DESIGN §3.
+pub fn heading_from_magnetic_field(
+    msg: &MagneticField,
+    calibration: &CompassCalibrationConfig,
+) -> Result<Heading, Skip> {
+    let m = &msg.magnetic_field;
+    if !(m.x.is_finite() && m.y.is_finite()) || (m.x == 0.0 && m.y == 0.0) {
+        return Err(Skip::NonFinite {
+            field: "magnetic_field",
+        });
+    }
+    let bearing = m.y.atan2(m.x);
+    Ok(Heading {
+        heading: heading_from_compass_bearing(
+            bearing,
+            calibration.declination,
+            calibration.map_offset,
+        ),
+        variance: None,
+    })
+}
+
+/// The pose of `frame` in `base` from static transforms (parent → child), following the
+/// chain of parents; `None` if `frame` is not connected to `base`.
+pub fn mount_from_tf(
+    transforms: &[TransformStamped],
+    base: &str,
+    frame: &str,
+) -> Option<Pose2<f64>> {
+    let mut pose = Pose2::identity();
+    let mut current = frame;
+    for _ in 0..=transforms.len() {
+        if current == base {
+            return Some(pose);
+        }
+        let t = transforms.iter().find(|t| t.child_frame_id == current)?;
+        let tr = &t.transform;
+        let parent_to_child = Pose2::new(tr.translation.x, tr.translation.y, tr.rotation.yaw());
+        pose = parent_to_child.compose(&pose);
+        current = &t.header.frame_id;
+    }
+    None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::ros2::geometry_msgs::{Quaternion, Transform, Vector3};
+    use crate::ros2::std_msgs::Header;
+    use core::f64::consts::FRAC_PI_2;
+
+    fn joints(names: &[&str], position: Vec<f64>, velocity: Vec<f64>) -> JointState {
+        JointState {
+            name: names.iter().map(|s| s.to_string()).collect(),
+            position,
+            velocity,
+            ..JointState::default()
+        }
+    }
+
+    #[test]
+    fn wheel_speeds_from_positions_and_velocities() {
+        let mut w = WheelTracker::new("l", "r");
+        assert_eq!(
+            w.speeds(0, &joints(&["r", "l"], vec![0.0, 0.0], vec![]))
+                .unwrap(),
+            Err(Skip::First)
+        );
+        // Differentiated: Δφ = (0.2, 0.4) over 0.1 s (joint order differs from config).
+        let s = w
+            .speeds(100_000_000, &joints(&["r", "l"], vec![0.4, 0.2], vec![]))
+            .unwrap()
+            .unwrap();
+        assert!(
+            (s.left - 2.0).abs() < 1e-12
+                && (s.right - 4.0).abs() < 1e-12
+                && (s.dt - 0.1).abs() < 1e-15
+        );
+        // Velocities win when present.
+        let s = w
+            .speeds(
+                200_000_000,
+                &joints(&["l", "r"], vec![0.3, 0.5], vec![1.0, 1.5]),
+            )
+            .unwrap()
+            .unwrap();
+        assert_eq!((s.left, s.right), (1.0, 1.5));
+        // Backwards and duplicate stamps are skipped and do not move the start.
+        assert_eq!(
+            w.speeds(150_000_000, &joints(&["l", "r"], vec![0.0, 0.0], vec![]))
+                .unwrap(),
+            Err(Skip::TimeNotIncreasing {
+                previous_ns: 200_000_000,
+                stamp_ns: 150_000_000
+            })
+        );
+        assert_eq!(
+            w.speeds(200_000_000, &joints(&["l", "r"], vec![0.0, 0.0], vec![]))
+                .unwrap(),
+            Err(Skip::TimeNotIncreasing {
+                previous_ns: 200_000_000,
+                stamp_ns: 200_000_000
+            })
+        );
+        assert_eq!(
+            w.speeds(
+                300_000_000,
+                &joints(&["l", "r"], vec![f64::NAN, 0.0], vec![])
+            )
+            .unwrap(),
+            Err(Skip::NonFinite { field: "position" })
+        );
+        assert_eq!(
+            w.speeds(300_000_000, &joints(&["a", "b"], vec![0.0, 0.0], vec![])),
+            Err(vec!["a".to_string(), "b".to_string()])
+        );
+    }
+
+    #[test]
+    fn compass_headings() {
+        let cal = CompassCalibrationConfig {
+            declination: 0.0,
+            map_offset: 0.0,
+        };
+        // Field pointing along the robot's x axis: the robot faces magnetic north → θ = π/2.
+        let north = MagneticField {
+            magnetic_field: Vector3 {
+                x: 2e-5,
+                y: 0.0,
+                z: -4e-5,
+            },
+            ..MagneticField::default()
+        };
+        assert!(
+            (heading_from_magnetic_field(&north, &cal).unwrap().heading - FRAC_PI_2).abs() < 1e-12
+        );
+        // Field to the robot's left (+y): north is 90° counter-clockwise, the robot faces east.
+        let east = MagneticField {
+            magnetic_field: Vector3 {
+                x: 0.0,
+                y: 2e-5,
+                z: 0.0,
+            },
+            ..MagneticField::default()
+        };
+        assert!(
+            heading_from_magnetic_field(&east, &cal)
+                .unwrap()
+                .heading
+                .abs()
+                < 1e-12
+        );
+        let mut imu = Imu {
+            orientation: Quaternion::from_yaw(0.3),
+            ..Imu::default()
+        };
+        imu.orientation_covariance[8] = 4e-4;
+        let h = heading_from_imu(
+            &imu,
+            &CompassCalibrationConfig {
+                declination: 0.1,
+                map_offset: -0.1,
+            },
+        )
+        .unwrap();
+        assert!((h.heading - 0.2).abs() < 1e-12 && h.variance == Some(4e-4));
+        imu.orientation_covariance[0] = -1.0;
+        assert_eq!(heading_from_imu(&imu, &cal).unwrap().variance, None);
+    }
+
+    #[test]
+    fn tf_chain() {
+        let tf = |parent: &str, child: &str, x: f64, yaw: f64| TransformStamped {
+            header: Header {
+                frame_id: parent.into(),
+                ..Header::default()
+            },
+            child_frame_id: child.into(),
+            transform: Transform {
+                translation: Vector3 { x, y: 0.0, z: 0.3 },
+                rotation: Quaternion::from_yaw(yaw),
+            },
+        };
+        let tfs = [
+            tf("base_link", "mast", 0.2, FRAC_PI_2),
+            tf("mast", "laser", 0.1, 0.0),
+        ];
+        let m = mount_from_tf(&tfs, "base_link", "laser").unwrap();
+        assert!(
+            (m.x - 0.2).abs() < 1e-12
+                && (m.y - 0.1).abs() < 1e-12
+                && (m.theta - FRAC_PI_2).abs() < 1e-12
+        );
+        assert_eq!(mount_from_tf(&tfs, "base_link", "camera"), None);
+        assert_eq!(
+            mount_from_tf(&tfs, "base_link", "base_link"),
+            Some(Pose2::identity())
+        );
+    }
+}

@@ -1,0 +1,751 @@
+//! `ekf replay`: a ROS 2 bag through the filter, in log-time order and streaming.
+//!
+//! Motion comes from `sensor_msgs/JointState` (wheel speeds) or `nav_msgs/Odometry`
+//! (pose deltas); headings from `sensor_msgs/Imu` or `sensor_msgs/MagneticField`; scans
+//! from `sensor_msgs/LaserScan`; the reference from `nav_msgs/Odometry` or
+//! `geometry_msgs/PoseStamped`; the laser mount from `/tf_static` when present. Outputs:
+//! an MCAP for Foxglove/ROS 2 ([`outputs`]), a TUM trajectory with a pose at every
+//! motion step and every scan (log times), and a [`ReplaySummary`].
+//!
+//! A damaged log is processed up to the damage; the outputs are then finished and the
+//! failure is returned next to the results ([`ReplayOutcome::failure`]).
+
+pub mod inputs;
+pub mod outputs;
+pub mod summary;
+
+use crate::config::{Config, MotionSource};
+use crate::eval::{ape, ApeOptions};
+use crate::mcap_io::{BagMessage, BagReader, MessageError, ReadError, WriteError};
+use crate::ros2::geometry_msgs::TransformStamped;
+use crate::ros2::AnyMessage;
+use crate::trajectory::Trajectory;
+use crate::tum::write_tum;
+use ekf_core::Pose2;
+use inputs::{
+    heading_from_imu, heading_from_magnetic_field, mount_from_tf, pose2, OdometryTracker, Skip,
+    WheelTracker,
+};
+use lrf_lines::{LineMap, Localizer, LocalizerError, ScanStage, StageClock};
+use nalgebra::Matrix3;
+use outputs::OutputBag;
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+pub use summary::ReplaySummary;
+
+/// The paper's four estimator configurations (Fig. 9/10).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Mode {
+    /// Prediction only: dead reckoning.
+    Odometry,
+    /// Prediction + compass.
+    Compass,
+    /// Prediction + laser lines.
+    Laser,
+    /// Prediction + laser lines + compass.
+    LaserCompass,
+}
+
+impl Mode {
+    /// All four, in the paper's order.
+    pub const ALL: [Mode; 4] = [
+        Mode::Odometry,
+        Mode::Compass,
+        Mode::Laser,
+        Mode::LaserCompass,
+    ];
+
+    /// The name used on the command line and in summaries.
+    pub fn name(self) -> &'static str {
+        match self {
+            Mode::Odometry => "odometry",
+            Mode::Compass => "compass",
+            Mode::Laser => "laser",
+            Mode::LaserCompass => "laser+compass",
+        }
+    }
+
+    fn uses_compass(self) -> bool {
+        matches!(self, Mode::Compass | Mode::LaserCompass)
+    }
+
+    fn uses_laser(self) -> bool {
+        matches!(self, Mode::Laser | Mode::LaserCompass)
+    }
+}
+
+/// What to replay and where to write.
+#[derive(Debug, Clone)]
+pub struct ReplayOptions {
+    /// Estimator configuration.
+    pub mode: Mode,
+    /// A line map (JSON); `None`: the map is built from the first scan, as in the paper.
+    pub map: Option<PathBuf>,
+    /// Start at the first reference pose instead of `config.initial`.
+    pub init_from_truth: bool,
+    /// Output bag.
+    pub out_mcap: Option<PathBuf>,
+    /// Output TUM trajectory.
+    pub tum: Option<PathBuf>,
+}
+
+/// Why a replay could not start or could not finish.
+#[derive(Debug, thiserror::Error)]
+pub enum ReplayError {
+    /// The log could not be read.
+    #[error(transparent)]
+    Read(#[from] ReadError),
+    /// A topic the mode needs is not in the log.
+    #[error("{log}: no topic {topic} ({role}); the log has: {available}")]
+    MissingTopic {
+        /// The log.
+        log: String,
+        /// The missing topic.
+        topic: String,
+        /// What it was needed for.
+        role: &'static str,
+        /// The topics the log has, with their types.
+        available: String,
+    },
+    /// A topic carries a type the replay cannot use for its role.
+    #[error("{log}: topic {topic} has type {actual}; expected {expected}")]
+    WrongType {
+        /// The log.
+        log: String,
+        /// The topic.
+        topic: String,
+        /// What it carries.
+        actual: String,
+        /// What the role needs.
+        expected: &'static str,
+    },
+    /// The wheel joints are not in the joint states.
+    #[error("{log}: {topic}: no joints named {left:?} and {right:?} (set motion.left_joint/right_joint); the message has {names:?}")]
+    MissingJoints {
+        /// The log.
+        log: String,
+        /// The joint-state topic.
+        topic: String,
+        /// Configured left joint.
+        left: String,
+        /// Configured right joint.
+        right: String,
+        /// The joints the message has.
+        names: Vec<String>,
+    },
+    /// `--init-from-truth` without a reference pose in the log.
+    #[error("{log}: --init-from-truth needs a reference pose on {topic}, but none was found")]
+    NoReference {
+        /// The log.
+        log: String,
+        /// The reference topic.
+        topic: String,
+    },
+    /// The map file could not be read or parsed.
+    #[error("{path}: {message}")]
+    Map {
+        /// The map file.
+        path: String,
+        /// What went wrong (the parser names the entry and field).
+        message: String,
+    },
+    /// The filter refused its configuration or failed.
+    #[error("{0}")]
+    Filter(#[from] LocalizerError),
+    /// A message could not be decoded.
+    #[error(transparent)]
+    Message(#[from] MessageError),
+    /// An output could not be written.
+    #[error(transparent)]
+    Write(#[from] WriteError),
+    /// The TUM file could not be written.
+    #[error("{path}: {source}")]
+    Tum {
+        /// The TUM file.
+        path: String,
+        /// What the OS said.
+        source: std::io::Error,
+    },
+}
+
+/// The results of a replay.
+#[derive(Debug)]
+pub struct ReplayOutcome {
+    /// Counts, timings, accuracy.
+    pub summary: ReplaySummary,
+    /// The estimate at every motion step and scan.
+    pub trajectory: Trajectory,
+    /// The log's reference poses (empty if none).
+    pub reference: Trajectory,
+    /// Set when the log broke off (damage, a decode failure): everything before it was
+    /// processed and the outputs are finished.
+    pub failure: Option<ReplayError>,
+}
+
+/// Topic types accepted for each role.
+const MOTION_JOINTS: &str = "sensor_msgs/msg/JointState";
+const MOTION_ODOM: &str = "nav_msgs/msg/Odometry";
+const SCAN: &str = "sensor_msgs/msg/LaserScan";
+const COMPASS: [&str; 2] = ["sensor_msgs/msg/Imu", "sensor_msgs/msg/MagneticField"];
+const REFERENCE: [&str; 2] = ["nav_msgs/msg/Odometry", "geometry_msgs/msg/PoseStamped"];
+
+/// Times the scan stages with a monotonic clock.
+struct StageTimer {
+    last: Instant,
+    samples: [Vec<f64>; 3],
+}
+
+impl StageClock for StageTimer {
+    fn stage_done(&mut self, stage: ScanStage) {
+        let now = Instant::now();
+        let us = now.duration_since(self.last).as_secs_f64() * 1e6;
+        self.last = now;
+        let i = match stage {
+            ScanStage::Extraction => 0,
+            ScanStage::Matching => 1,
+            ScanStage::Update => 2,
+        };
+        self.samples[i].push(us);
+    }
+}
+
+/// What the first pass over the log found: the scan frame, static transforms up to the
+/// first scan, and the first reference pose.
+struct Preamble {
+    scan_frame: Option<String>,
+    transforms: Vec<TransformStamped>,
+    first_reference: Option<(u64, Pose2<f64>)>,
+}
+
+/// Replays `log` with `config`. `progress(done, total)` is called as messages are read.
+pub fn replay(
+    log: &Path,
+    config: &Config,
+    options: &ReplayOptions,
+    progress: &mut dyn FnMut(u64, u64),
+) -> Result<ReplayOutcome, ReplayError> {
+    let started = Instant::now();
+    let log_name = log.display().to_string();
+    let bag = BagReader::open(log)?;
+    let topic_type = |topic: &str| {
+        bag.topics()
+            .iter()
+            .find(|t| t.topic == topic)
+            .map(|t| t.type_name.clone())
+    };
+    let available = || {
+        bag.topics()
+            .iter()
+            .map(|t| format!("{} ({})", t.topic, t.type_name))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let missing = |topic: &str, role: &'static str| ReplayError::MissingTopic {
+        log: log_name.clone(),
+        topic: topic.into(),
+        role,
+        available: available(),
+    };
+    let check_type = |topic: &str,
+                      expected: &[&str],
+                      what: &'static str|
+     -> Result<(), ReplayError> {
+        match topic_type(topic) {
+            Some(actual) if !expected.contains(&actual.as_str()) => Err(ReplayError::WrongType {
+                log: log_name.clone(),
+                topic: topic.into(),
+                actual,
+                expected: what,
+            }),
+            _ => Ok(()),
+        }
+    };
+    let t = &config.topics;
+
+    // Motion source.
+    let use_joints = match config.motion.source {
+        MotionSource::JointStates => true,
+        MotionSource::Odom => false,
+        MotionSource::Auto => topic_type(&t.joint_states).is_some(),
+    };
+    let motion_topic = if use_joints { &t.joint_states } else { &t.odom };
+    if topic_type(motion_topic).is_none() {
+        return Err(missing(
+            motion_topic,
+            if use_joints {
+                "wheel joint states"
+            } else {
+                "odometry"
+            },
+        ));
+    }
+    check_type(
+        &t.joint_states,
+        &[MOTION_JOINTS],
+        "sensor_msgs/msg/JointState",
+    )?;
+    check_type(&t.odom, &[MOTION_ODOM], "nav_msgs/msg/Odometry")?;
+    check_type(&t.scan, &[SCAN], "sensor_msgs/msg/LaserScan")?;
+    check_type(
+        &t.compass,
+        &COMPASS,
+        "sensor_msgs/msg/Imu or sensor_msgs/msg/MagneticField",
+    )?;
+    check_type(
+        &t.ground_truth,
+        &REFERENCE,
+        "nav_msgs/msg/Odometry or geometry_msgs/msg/PoseStamped",
+    )?;
+    if options.mode.uses_laser() && topic_type(&t.scan).is_none() {
+        return Err(missing(&t.scan, "laser scans"));
+    }
+    if options.mode.uses_compass() && topic_type(&t.compass).is_none() {
+        return Err(missing(&t.compass, "compass"));
+    }
+
+    let preamble = read_preamble(&bag, config, options.init_from_truth)?;
+    let mut summary = ReplaySummary {
+        log: log_name.clone(),
+        mode: options.mode.name().into(),
+        motion_topic: motion_topic.clone(),
+        ..ReplaySummary::default()
+    };
+
+    // Laser mount: tf_static, else the configuration.
+    let mut localizer_config = config.localizer.clone();
+    summary.laser_mount_source = "config".into();
+    if config.laser.mount_from_tf_static {
+        if let Some(mount) = preamble
+            .scan_frame
+            .as_deref()
+            .and_then(|f| mount_from_tf(&preamble.transforms, &config.laser.base_frame, f))
+        {
+            localizer_config.laser_mount = mount;
+            summary.laser_mount_source = "tf_static".into();
+        }
+    }
+    let m = localizer_config.laser_mount;
+    summary.laser_mount = [m.x, m.y, m.theta];
+
+    // Initial state.
+    let (start_ns, initial) = if options.init_from_truth {
+        let (t0, pose) = preamble
+            .first_reference
+            .ok_or_else(|| ReplayError::NoReference {
+                log: log_name.clone(),
+                topic: t.ground_truth.clone(),
+            })?;
+        (t0, pose)
+    } else {
+        let i = &config.initial;
+        (0, Pose2::new(i.x, i.y, i.theta))
+    };
+    let (sxy, sth) = (config.initial.sigma_xy, config.initial.sigma_theta);
+    let p0 = Matrix3::from_diagonal(&nalgebra::Vector3::new(sxy * sxy, sxy * sxy, sth * sth));
+
+    let mut localizer = match &options.map {
+        Some(path) => {
+            let map = load_map(path)?;
+            summary.map = path.display().to_string();
+            Localizer::new(localizer_config, initial, p0, map)?
+        }
+        None => {
+            summary.map = "first scan".into();
+            Localizer::with_first_scan_map(localizer_config, initial, p0)?
+        }
+    };
+    summary.map_segments = localizer.map().len();
+
+    let mut out = options
+        .out_mcap
+        .as_deref()
+        .map(OutputBag::create)
+        .transpose()?;
+    let mut run = Run {
+        config,
+        mode: options.mode,
+        start_ns,
+        use_joints,
+        localizer: &mut localizer,
+        out: out.as_mut(),
+        summary: &mut summary,
+        trajectory: Trajectory::default(),
+        reference: Trajectory::default(),
+        wheels: WheelTracker::new(&config.motion.left_joint, &config.motion.right_joint),
+        odometry: OdometryTracker::default(),
+        timer: StageTimer {
+            last: Instant::now(),
+            samples: Default::default(),
+        },
+        map_written: false,
+    };
+    if let Some(out) = run.out.as_deref_mut() {
+        if options.map.is_some() {
+            out.map(start_ns, run.localizer.map())?;
+            run.map_written = true;
+        }
+    }
+
+    let total: u64 = bag.topics().iter().map(|t| t.message_count).sum();
+    let mut failure = None;
+    let mut done = 0;
+    for message in bag.messages()? {
+        let step = message
+            .map_err(ReplayError::from)
+            .and_then(|m| run.handle(&m, &log_name));
+        if let Err(e) = step {
+            failure = Some(e);
+            break;
+        }
+        done += 1;
+        progress(done, total);
+    }
+
+    // Finish every output, whatever happened above.
+    let Run {
+        trajectory,
+        reference,
+        timer,
+        ..
+    } = run;
+    if let Some(out) = out {
+        out.finish()?;
+    }
+    if let Some(path) = &options.tum {
+        write_tum_file(path, &trajectory)?;
+    }
+    summary.map_segments = localizer.map().len();
+    let [mut ext, mut mat, mut upd] = timer.samples;
+    summary.timings = summary::Timings {
+        extraction: summary::StageTiming::from_samples(&mut ext),
+        matching: summary::StageTiming::from_samples(&mut mat),
+        update: summary::StageTiming::from_samples(&mut upd),
+    };
+    summary.poses_written = trajectory.len() as u64;
+    if !reference.is_empty() && !trajectory.is_empty() {
+        if let Ok(a) = ape(&reference, &trajectory, &ApeOptions::default()) {
+            let s = &a.summary;
+            summary.accuracy = Some(summary::Accuracy {
+                matched_poses: s.matched_poses,
+                position_rmse_m: s.translation_m.rmse,
+                position_max_m: s.translation_m.max,
+                heading_rmse_deg: s.heading_error_deg.rmse,
+            });
+        }
+    }
+    summary.wall_time_s = started.elapsed().as_secs_f64();
+    Ok(ReplayOutcome {
+        summary,
+        trajectory,
+        reference,
+        failure,
+    })
+}
+
+fn write_tum_file(path: &Path, trajectory: &Trajectory) -> Result<(), ReplayError> {
+    let tum_error = |source| ReplayError::Tum {
+        path: path.display().to_string(),
+        source,
+    };
+    let mut file = std::io::BufWriter::new(std::fs::File::create(path).map_err(tum_error)?);
+    write_tum(&mut file, trajectory).map_err(tum_error)?;
+    file.flush().map_err(tum_error)
+}
+
+/// Reads a JSON line map.
+pub fn load_map(path: &Path) -> Result<LineMap, ReplayError> {
+    let map_error = |message: String| ReplayError::Map {
+        path: path.display().to_string(),
+        message,
+    };
+    let bytes = std::fs::read(path).map_err(|e| map_error(e.to_string()))?;
+    LineMap::from_json_bytes(&bytes).map_err(|e| map_error(e.to_string()))
+}
+
+/// Reads the start of the log: static transforms and the scan frame up to the first scan,
+/// and (when asked) the first reference pose. Stops as soon as it has them.
+fn read_preamble(
+    bag: &BagReader,
+    config: &Config,
+    want_reference: bool,
+) -> Result<Preamble, ReplayError> {
+    let t = &config.topics;
+    let mut p = Preamble {
+        scan_frame: None,
+        transforms: Vec::new(),
+        first_reference: None,
+    };
+    let has_scan = bag.topics().iter().any(|i| i.topic == t.scan);
+    for message in bag.messages()? {
+        let Ok(message) = message else { break };
+        let topic = message.topic();
+        if p.scan_frame.is_none() && topic == t.tf_static {
+            if let Ok(AnyMessage::TFMessage(tf)) = message.decode() {
+                p.transforms.extend(tf.transforms);
+            }
+        } else if p.scan_frame.is_none() && topic == t.scan {
+            if let Ok(AnyMessage::LaserScan(scan)) = message.decode() {
+                p.scan_frame = Some(scan.header.frame_id);
+            }
+        } else if want_reference && p.first_reference.is_none() && topic == t.ground_truth {
+            p.first_reference = reference_pose(&message).map(|pose| (message.log_time, pose));
+        }
+        let scan_done = p.scan_frame.is_some() || !has_scan;
+        if scan_done && (!want_reference || p.first_reference.is_some()) {
+            break;
+        }
+    }
+    Ok(p)
+}
+
+fn reference_pose(message: &BagMessage) -> Option<Pose2<f64>> {
+    match message.decode().ok()? {
+        AnyMessage::Odometry(o) => pose2(&o.pose.pose),
+        AnyMessage::PoseStamped(p) => pose2(&p.pose),
+        _ => None,
+    }
+}
+
+/// The state of one replay loop.
+struct Run<'a> {
+    config: &'a Config,
+    mode: Mode,
+    start_ns: u64,
+    use_joints: bool,
+    localizer: &'a mut Localizer,
+    out: Option<&'a mut OutputBag>,
+    summary: &'a mut ReplaySummary,
+    trajectory: Trajectory,
+    reference: Trajectory,
+    wheels: WheelTracker,
+    odometry: OdometryTracker,
+    timer: StageTimer,
+    map_written: bool,
+}
+
+impl Run<'_> {
+    /// One message.
+    fn handle(&mut self, message: &BagMessage, log: &str) -> Result<(), ReplayError> {
+        let topic = message.topic();
+        *self
+            .summary
+            .messages_read
+            .entry(topic.to_owned())
+            .or_default() += 1;
+        let t = &self.config.topics;
+        let now = message.log_time;
+        let is_motion = if self.use_joints {
+            topic == t.joint_states
+        } else {
+            topic == t.odom
+        };
+        if is_motion {
+            self.motion(message, log)
+        } else if topic == t.scan {
+            self.scan(message)
+        } else if topic == t.compass && self.mode.uses_compass() {
+            self.compass(message)
+        } else if topic == t.ground_truth {
+            if let Some(pose) = reference_pose(message) {
+                self.reference.push(now, pose);
+            } else {
+                self.summary.warn(
+                    topic,
+                    now,
+                    "reference pose is not finite or not decodable".into(),
+                );
+            }
+            Ok(())
+        } else {
+            Ok(())
+        }
+    }
+
+    fn skip(&mut self, topic: &str, now: u64, skip: Skip) {
+        if skip != Skip::First {
+            self.summary.warn(topic, now, skip.to_string());
+        }
+    }
+
+    fn motion(&mut self, message: &BagMessage, log: &str) -> Result<(), ReplayError> {
+        let now = message.log_time;
+        let topic = message.topic();
+        let step = match message.decode()? {
+            AnyMessage::JointState(js) => {
+                let stamp = js.header.stamp.to_nanos().filter(|&s| s > 0).unwrap_or(now);
+                let speeds =
+                    self.wheels
+                        .speeds(stamp, &js)
+                        .map_err(|names| ReplayError::MissingJoints {
+                            log: log.into(),
+                            topic: topic.into(),
+                            left: self.config.motion.left_joint.clone(),
+                            right: self.config.motion.right_joint.clone(),
+                            names,
+                        })?;
+                speeds.map(|s| (now >= self.start_ns).then(|| self.localizer.predict_wheels(&s)))
+            }
+            AnyMessage::Odometry(o) => {
+                let stamp = o.header.stamp.to_nanos().filter(|&s| s > 0).unwrap_or(now);
+                self.odometry
+                    .motion(stamp, &o.pose.pose)
+                    .map(|m| (now >= self.start_ns).then(|| self.localizer.predict_odometry(&m)))
+            }
+            _ => return Ok(()),
+        };
+        match step {
+            Err(skip) => self.skip(topic, now, skip),
+            Ok(None) => {}
+            Ok(Some(result)) => {
+                result?;
+                self.summary.motion_steps += 1;
+                self.record_pose(now)?;
+            }
+        }
+        Ok(())
+    }
+
+    fn compass(&mut self, message: &BagMessage) -> Result<(), ReplayError> {
+        let now = message.log_time;
+        if now < self.start_ns {
+            return Ok(());
+        }
+        let cal = &self.config.compass_calibration;
+        let heading = match message.decode()? {
+            AnyMessage::Imu(imu) => heading_from_imu(&imu, cal),
+            AnyMessage::MagneticField(m) => heading_from_magnetic_field(&m, cal),
+            _ => return Ok(()),
+        };
+        let h = match heading {
+            Ok(h) => h,
+            Err(skip) => {
+                self.skip(message.topic(), now, skip);
+                return Ok(());
+            }
+        };
+        let variance = h.variance.unwrap_or(self.config.localizer.compass.variance);
+        let outcome = self
+            .localizer
+            .update_compass_with_variance(h.heading, variance)?;
+        if outcome.accepted {
+            self.summary.compass.accepted += 1;
+        } else {
+            self.summary.compass.rejected += 1;
+        }
+        if let Some(out) = self.out.as_deref_mut() {
+            let (level, text) = if outcome.accepted {
+                (0, "fused")
+            } else {
+                (1, "rejected by the chi-square gate")
+            };
+            out.diagnostics(
+                now,
+                "ekf/compass",
+                level,
+                text,
+                vec![
+                    ("nis", format!("{:.4}", outcome.nis)),
+                    ("heading_rad", format!("{:.6}", h.heading)),
+                ],
+            )?;
+            out.pose(now, &self.localizer.pose(), self.localizer.covariance())?;
+        }
+        Ok(())
+    }
+
+    fn scan(&mut self, message: &BagMessage) -> Result<(), ReplayError> {
+        let now = message.log_time;
+        self.summary.lines.scans += 1;
+        if now < self.start_ns {
+            return Ok(());
+        }
+        if self.mode.uses_laser() {
+            let AnyMessage::LaserScan(scan) = message.decode()? else {
+                return Ok(());
+            };
+            self.timer.last = Instant::now();
+            let report = match self
+                .localizer
+                .update_scan_timed(&scan.as_scan(), &mut self.timer)
+            {
+                Ok(r) => r,
+                Err(LocalizerError::Extraction(e)) => {
+                    self.summary.warn(message.topic(), now, e.to_string());
+                    return Ok(());
+                }
+                Err(e) => return Err(e.into()),
+            };
+            let l = &mut self.summary.lines;
+            l.scans_used += 1;
+            l.extracted += report.extracted as u64;
+            l.matched += report.matched as u64;
+            l.rejected += report.rejected as u64;
+            l.fused += report.fused as u64;
+            l.refused += report.refused as u64;
+            if let Some(out) = self.out.as_deref_mut() {
+                if report.map_built && !self.map_written {
+                    out.map(now, self.localizer.map())?;
+                    self.map_written = true;
+                }
+                let fused: Vec<usize> = self
+                    .localizer
+                    .last_fusions()
+                    .iter()
+                    .filter(|f| f.accepted)
+                    .map(|f| f.observed)
+                    .collect();
+                let nis: Vec<String> = self
+                    .localizer
+                    .last_fusions()
+                    .iter()
+                    .map(|f| format!("{:.3}", f.nis))
+                    .collect();
+                out.scan_markers(
+                    now,
+                    &self.localizer.sensor_pose(),
+                    self.localizer.last_lines(),
+                    &fused,
+                    &self.localizer.pose(),
+                    self.localizer.covariance(),
+                )?;
+                let values = vec![
+                    ("lines_extracted", report.extracted.to_string()),
+                    ("lines_matched", report.matched.to_string()),
+                    ("lines_rejected", report.rejected.to_string()),
+                    ("lines_fused", report.fused.to_string()),
+                    ("lines_refused", report.refused.to_string()),
+                    ("nis", nis.join(" ")),
+                ];
+                let level =
+                    u8::from(report.extracted > 0 && report.fused == 0 && !report.map_built);
+                out.diagnostics(
+                    now,
+                    "ekf/scan",
+                    level,
+                    if level == 0 { "ok" } else { "no line fused" },
+                    values,
+                )?;
+            }
+        }
+        self.record_pose(now)
+    }
+
+    /// A pose for the TUM trajectory and the output bag.
+    fn record_pose(&mut self, now: u64) -> Result<(), ReplayError> {
+        let pose = self.localizer.pose();
+        if self
+            .trajectory
+            .samples
+            .last()
+            .is_some_and(|s| s.t_ns == now)
+        {
+            self.trajectory.samples.pop();
+        }
+        self.trajectory.push(now, pose);
+        if let Some(out) = self.out.as_deref_mut() {
+            out.pose(now, &pose, self.localizer.covariance())?;
+        }
+        Ok(())
+    }
+}

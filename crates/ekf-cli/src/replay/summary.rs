@@ -1,0 +1,165 @@
+//! The JSON summary of a replay (`ekf replay --json`), and the per-stage timing record.
+
+use serde::Serialize;
+use std::collections::BTreeMap;
+
+/// Median and 99th percentile of one stage's durations (µs).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct StageTiming {
+    /// Number of timed calls.
+    pub count: usize,
+    /// Median (µs).
+    pub median_us: f64,
+    /// 99th percentile, nearest rank (µs).
+    pub p99_us: f64,
+}
+
+impl StageTiming {
+    /// From durations in µs (reorders them).
+    pub fn from_samples(samples: &mut [f64]) -> Self {
+        if samples.is_empty() {
+            return Self::default();
+        }
+        samples.sort_by(f64::total_cmp);
+        let rank = |q: f64| {
+            samples[((q * samples.len() as f64).ceil() as usize).clamp(1, samples.len()) - 1]
+        };
+        Self {
+            count: samples.len(),
+            median_us: rank(0.5),
+            p99_us: rank(0.99),
+        }
+    }
+}
+
+/// Per-stage timings of the scan updates.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct Timings {
+    /// Line extraction.
+    pub extraction: StageTiming,
+    /// Matching against the map.
+    pub matching: StageTiming,
+    /// The sequential EKF update.
+    pub update: StageTiming,
+}
+
+/// Counts of the laser pipeline.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
+pub struct LineCounts {
+    /// Scans read.
+    pub scans: u64,
+    /// Scans used for an update (0 in the modes without laser).
+    pub scans_used: u64,
+    /// Lines extracted.
+    pub extracted: u64,
+    /// Lines matched to the map (passed gate and overlap).
+    pub matched: u64,
+    /// Lines not matched (outside the gate, no overlap, wall taken).
+    pub rejected: u64,
+    /// Matched lines fused.
+    pub fused: u64,
+    /// Matched lines refused by the re-evaluated gate.
+    pub refused: u64,
+}
+
+/// Counts of the compass updates.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
+pub struct CompassCounts {
+    /// Headings fused.
+    pub accepted: u64,
+    /// Headings rejected by the chi-square gate.
+    pub rejected: u64,
+}
+
+/// Accuracy against the log's reference (`evo`'s APE without alignment).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Accuracy {
+    /// Estimated poses matched to a reference pose by time stamp (within 10 ms).
+    pub matched_poses: usize,
+    /// Position RMSE (m).
+    pub position_rmse_m: f64,
+    /// Largest position error (m).
+    pub position_max_m: f64,
+    /// Heading RMSE (degrees).
+    pub heading_rmse_deg: f64,
+}
+
+/// A message that was read but not used, and why.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+pub struct Warning {
+    /// Its topic.
+    pub topic: String,
+    /// Its log time (ns).
+    pub log_time_ns: u64,
+    /// Why it was skipped.
+    pub reason: String,
+}
+
+/// Everything `ekf replay --json` prints.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct ReplaySummary {
+    /// The input log.
+    pub log: String,
+    /// The estimator configuration (`odometry`, `compass`, `laser`, `laser+compass`).
+    pub mode: String,
+    /// Where the motion came from (a topic name).
+    pub motion_topic: String,
+    /// Where the map came from (`first scan` or a file) and its size.
+    pub map: String,
+    /// Map segments.
+    pub map_segments: usize,
+    /// The laser mounting pose used, `[x, y, θ]`, and where it came from.
+    pub laser_mount: [f64; 3],
+    /// `config` or `tf_static`.
+    pub laser_mount_source: String,
+    /// Messages read per topic.
+    pub messages_read: BTreeMap<String, u64>,
+    /// Motion steps predicted.
+    pub motion_steps: u64,
+    /// Poses written (TUM rows).
+    pub poses_written: u64,
+    /// Laser pipeline counts.
+    pub lines: LineCounts,
+    /// Compass counts.
+    pub compass: CompassCounts,
+    /// Per-stage timings of the scan updates.
+    pub timings: Timings,
+    /// Wall-clock time of the replay (s).
+    pub wall_time_s: f64,
+    /// Messages skipped, in total.
+    pub warning_count: u64,
+    /// The first skipped messages with their reasons (at most 20).
+    pub warnings: Vec<Warning>,
+    /// Accuracy against the reference, when the log has one.
+    pub accuracy: Option<Accuracy>,
+}
+
+/// Most warnings kept verbatim in the summary.
+pub const MAX_WARNINGS: usize = 20;
+
+impl ReplaySummary {
+    /// Records a skipped message.
+    pub fn warn(&mut self, topic: &str, log_time_ns: u64, reason: String) {
+        self.warning_count += 1;
+        if self.warnings.len() < MAX_WARNINGS {
+            self.warnings.push(Warning {
+                topic: topic.into(),
+                log_time_ns,
+                reason,
+            });
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn nearest_rank_percentiles() {
+        let mut v: Vec<f64> = (1..=200).rev().map(f64::from).collect();
+        let t = StageTiming::from_samples(&mut v);
+        assert_eq!((t.count, t.median_us, t.p99_us), (200, 100.0, 198.0));
+        assert_eq!(StageTiming::from_samples(&mut []), StageTiming::default());
+    }
+}
