@@ -4,7 +4,7 @@
 
 use clap::ValueEnum;
 use clap::{Parser, Subcommand};
-use ekf_cli::commands::{evaluate, import};
+use ekf_cli::commands::{evaluate, import, map};
 use ekf_cli::config::{Config, DEFAULT_TOML};
 use ekf_cli::import::{CarmenFlavour, CarmenOptions, SyntheticCompass};
 use ekf_cli::replay::{self, Mode, ReplayOptions};
@@ -51,6 +51,11 @@ enum Command {
     },
     /// Print the documented default configuration (TOML).
     Config,
+    /// Line maps.
+    Map {
+        #[command(subcommand)]
+        action: MapAction,
+    },
     /// Convert a CARMEN or MRPT text log into a ROS 2 bag (MCAP) with /odom, /scan,
     /// /tf_static, /ground_truth (corrected CARMEN logs) and optionally a synthetic /compass.
     Import {
@@ -114,6 +119,32 @@ enum ImportFormat {
     },
 }
 
+#[derive(Debug, Subcommand)]
+enum MapAction {
+    /// Build a line map (JSON) from a bag: from its first scan (the paper's global map),
+    /// or with --from-truth from every scan placed along the log's reference trajectory.
+    Build {
+        /// The ROS 2 bag (.mcap).
+        log: PathBuf,
+        /// The map file to write.
+        #[arg(long)]
+        out: PathBuf,
+        /// Place every scan at the reference pose and fuse repeated sightings of a wall.
+        #[arg(long)]
+        from_truth: bool,
+        /// With a first-scan map: place the scan at the first reference pose instead of
+        /// the configured initial pose.
+        #[arg(long)]
+        init_from_truth: bool,
+        /// Configuration file (TOML): topics, laser mount, extraction parameters.
+        #[arg(long)]
+        config: Option<PathBuf>,
+        /// Print the summary as JSON.
+        #[arg(long)]
+        json: bool,
+    },
+}
+
 #[derive(Debug, Clone, Copy, ValueEnum)]
 enum CliMode {
     Odometry,
@@ -131,6 +162,16 @@ impl From<CliMode> for Mode {
             CliMode::Laser => Mode::Laser,
             CliMode::LaserCompass => Mode::LaserCompass,
         }
+    }
+}
+
+/// Creates the folder an output file goes into, so `--out results/run.mcap` just works.
+fn create_parent(path: &std::path::Path) -> Result<(), String> {
+    match path.parent() {
+        Some(dir) if !dir.as_os_str().is_empty() => {
+            std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))
+        }
+        _ => Ok(()),
     }
 }
 
@@ -217,6 +258,40 @@ fn print_import(
 fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
     match cli.command {
         Command::Config => print!("{DEFAULT_TOML}"),
+        Command::Map {
+            action:
+                MapAction::Build {
+                    log,
+                    out,
+                    from_truth,
+                    init_from_truth,
+                    config,
+                    json,
+                },
+        } => {
+            let config = load_config(config.as_deref())?;
+            let source = if from_truth {
+                map::MapSource::Reference(Default::default())
+            } else {
+                map::MapSource::FirstScan { init_from_truth }
+            };
+            let (line_map, summary) = map::build_map(&log, &config, source)?;
+            let text = line_map.to_json()?;
+            create_parent(&out)?;
+            std::fs::write(&out, text).map_err(|e| format!("{}: {e}", out.display()))?;
+            if json {
+                println!("{}", serde_json::to_string_pretty(&summary)?);
+            } else {
+                println!(
+                    "{}: {} segments from {} scans ({} lines; {} scans skipped)",
+                    out.display(),
+                    summary.segments,
+                    summary.scans_used,
+                    summary.lines,
+                    summary.scans_skipped
+                );
+            }
+        }
         Command::Replay {
             log,
             config,
@@ -228,6 +303,9 @@ fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
             json,
         } => {
             let config = load_config(config.as_deref())?;
+            for path in [&out, &tum].into_iter().flatten() {
+                create_parent(path)?;
+            }
             let options = ReplayOptions {
                 mode: mode.into(),
                 map,
@@ -279,12 +357,14 @@ fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
                 laser_max_range,
                 synthetic_compass,
             };
+            create_parent(&out)?;
             let summary = import::import_log(&input, &out, import::LogFormat::Carmen(options))?;
             print_import(&summary, &out, json)?;
         }
         Command::Import {
             format: ImportFormat::Mrpt { input, out, json },
         } => {
+            create_parent(&out)?;
             let summary = import::import_log(&input, &out, import::LogFormat::Mrpt)?;
             print_import(&summary, &out, json)?;
         }

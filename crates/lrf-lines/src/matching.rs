@@ -8,7 +8,7 @@ use alloc::vec::Vec;
 use core::f64::consts::{PI, TAU};
 use core::fmt;
 use ekf_core::{angle_diff, ChiSquareGate, Ekf, Error, Innovation, LaserLine, Pose2};
-use nalgebra::Point2;
+use nalgebra::{Matrix2, Point2};
 use serde::{Deserialize, Serialize};
 
 /// Matching parameters.
@@ -25,6 +25,13 @@ pub struct MatchParams {
     /// length of the observed segment projected onto the wall, so a short observed
     /// segment must lie mostly on the wall and a long one needs `min_overlap`. Default 0.5.
     pub min_overlap_fraction: f64,
+    /// Standard deviation of a map wall's distance `ρ` as the laser sees it (m): the map's
+    /// own error (walls placed from estimated poses, walls that are not perfectly straight
+    /// or flat) that no scan can average away. Added to the observed line's `R_rr`, so the
+    /// filter does not treat the map as exact. Default 0.02 m.
+    pub map_sigma_r: f64,
+    /// Standard deviation of a map wall's direction (rad), added to `R_ψψ`. Default 1°.
+    pub map_sigma_psi: f64,
 }
 
 impl Default for MatchParams {
@@ -33,7 +40,21 @@ impl Default for MatchParams {
             gate_probability: 0.99,
             min_overlap: 0.2,
             min_overlap_fraction: 0.5,
+            map_sigma_r: 0.02,
+            map_sigma_psi: 1.0_f64.to_radians(),
         }
+    }
+}
+
+impl MatchParams {
+    /// The measurement noise of a matched line: the observed line's covariance plus the
+    /// map's, `R = R_obs + diag(σ_map,r², σ_map,ψ²)`.
+    pub fn line_noise(&self, observed: &Matrix2<f64>) -> Matrix2<f64> {
+        observed
+            + Matrix2::from_diagonal(&nalgebra::Vector2::new(
+                self.map_sigma_r * self.map_sigma_r,
+                self.map_sigma_psi * self.map_sigma_psi,
+            ))
     }
 }
 
@@ -222,6 +243,8 @@ impl Matcher {
         for (v, what) in [
             (params.min_overlap, "matching min_overlap"),
             (params.min_overlap_fraction, "matching min_overlap_fraction"),
+            (params.map_sigma_r, "matching map_sigma_r"),
+            (params.map_sigma_psi, "matching map_sigma_psi"),
         ] {
             if !v.is_finite() {
                 return Err(Error::NonFinite { what });
@@ -313,7 +336,13 @@ impl Matcher {
         mount: &Pose2<f64>,
         out: &mut MatchResult,
     ) {
-        let pair = PairGate::new(line, ekf, mount, &self.gate);
+        let pair = PairGate::new(
+            line,
+            self.params.line_noise(&line.covariance),
+            ekf,
+            mount,
+            &self.gate,
+        );
         let first = out.candidates.len();
         for (j, (segment, wall)) in map.segments.iter().zip(&out.walls).enumerate() {
             if !pair.may_pass(segment, wall) {
@@ -358,6 +387,8 @@ impl Matcher {
 /// The gate applied to one observed line and any wall, with what it needs precomputed.
 struct PairGate<'a> {
     line: &'a ObservedLine,
+    /// The line's measurement noise `R` (observed plus map).
+    noise: Matrix2<f64>,
     ekf: &'a Ekf<f64>,
     mount: &'a Pose2<f64>,
     gate: &'a ChiSquareGate<f64>,
@@ -374,6 +405,7 @@ struct PairGate<'a> {
 impl<'a> PairGate<'a> {
     fn new(
         line: &'a ObservedLine,
+        noise: Matrix2<f64>,
         ekf: &'a Ekf<f64>,
         mount: &'a Pose2<f64>,
         gate: &'a ChiSquareGate<f64>,
@@ -384,12 +416,13 @@ impl<'a> PairGate<'a> {
         let lever = mount.x * mount.x + mount.y * mount.y;
         Self {
             line,
+            noise,
             ekf,
             mount,
             gate,
             sensor,
-            s_psi: p[(2, 2)] + line.covariance[(1, 1)],
-            s_r_max: (1.0 + lever) * p.trace() + line.covariance[(0, 0)],
+            s_psi: p[(2, 2)] + noise[(1, 1)],
+            s_r_max: (1.0 + lever) * p.trace() + noise[(0, 0)],
             a: sensor.transform_point(&line.start),
             b: sensor.transform_point(&line.end),
         }
@@ -414,7 +447,7 @@ impl<'a> PairGate<'a> {
     fn gated_innovation(&self, segment: &MapSegment) -> Option<Innovation<f64, 2>> {
         let model = LaserLine {
             observed: self.line.line,
-            covariance: self.line.covariance,
+            covariance: self.noise,
             map_line: segment.line,
             mount: *self.mount,
         };

@@ -3,3 +3,4 @@
 
 pub mod evaluate;
 pub mod import;
+pub mod map;

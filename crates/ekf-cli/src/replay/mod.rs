@@ -212,10 +212,10 @@ impl StageClock for StageTimer {
 
 /// What the first pass over the log found: the scan frame, static transforms up to the
 /// first scan, and the first reference pose.
-struct Preamble {
-    scan_frame: Option<String>,
-    transforms: Vec<TransformStamped>,
-    first_reference: Option<(u64, Pose2<f64>)>,
+pub(crate) struct Preamble {
+    pub(crate) scan_frame: Option<String>,
+    pub(crate) transforms: Vec<TransformStamped>,
+    pub(crate) first_reference: Option<(u64, Pose2<f64>)>,
 }
 
 /// Replays `log` with `config`. `progress(done, total)` is called as messages are read.
@@ -314,19 +314,10 @@ pub fn replay(
 
     // Laser mount: tf_static, else the configuration.
     let mut localizer_config = config.localizer.clone();
-    summary.laser_mount_source = "config".into();
-    if config.laser.mount_from_tf_static {
-        if let Some(mount) = preamble
-            .scan_frame
-            .as_deref()
-            .and_then(|f| mount_from_tf(&preamble.transforms, &config.laser.base_frame, f))
-        {
-            localizer_config.laser_mount = mount;
-            summary.laser_mount_source = "tf_static".into();
-        }
-    }
-    let m = localizer_config.laser_mount;
-    summary.laser_mount = [m.x, m.y, m.theta];
+    let (mount, source) = laser_mount(&preamble, config);
+    localizer_config.laser_mount = mount;
+    summary.laser_mount_source = source.into();
+    summary.laser_mount = [mount.x, mount.y, mount.theta];
 
     // Initial state.
     let (start_ns, initial) = if options.init_from_truth {
@@ -453,6 +444,26 @@ fn write_tum_file(path: &Path, trajectory: &Trajectory) -> Result<(), ReplayErro
     file.flush().map_err(tum_error)
 }
 
+/// The laser's mounting pose: `base_frame` → the scan's frame from `/tf_static` when
+/// the log has that chain and the configuration allows it, else `localizer.laser_mount`.
+/// Returns the pose and where it came from (`tf_static` or `config`).
+pub(crate) fn laser_mount(preamble: &Preamble, config: &Config) -> (Pose2<f64>, &'static str) {
+    let from_tf = config
+        .laser
+        .mount_from_tf_static
+        .then(|| {
+            preamble
+                .scan_frame
+                .as_deref()
+                .and_then(|f| mount_from_tf(&preamble.transforms, &config.laser.base_frame, f))
+        })
+        .flatten();
+    match from_tf {
+        Some(mount) => (mount, "tf_static"),
+        None => (config.localizer.laser_mount, "config"),
+    }
+}
+
 /// Reads a JSON line map.
 pub fn load_map(path: &Path) -> Result<LineMap, ReplayError> {
     let map_error = |message: String| ReplayError::Map {
@@ -465,7 +476,7 @@ pub fn load_map(path: &Path) -> Result<LineMap, ReplayError> {
 
 /// Reads the start of the log: static transforms and the scan frame up to the first scan,
 /// and (when asked) the first reference pose. Stops as soon as it has them.
-fn read_preamble(
+pub(crate) fn read_preamble(
     bag: &BagReader,
     config: &Config,
     want_reference: bool,
@@ -499,7 +510,7 @@ fn read_preamble(
     Ok(p)
 }
 
-fn reference_pose(message: &BagMessage) -> Option<Pose2<f64>> {
+pub(crate) fn reference_pose(message: &BagMessage) -> Option<Pose2<f64>> {
     match message.decode().ok()? {
         AnyMessage::Odometry(o) => pose2(&o.pose.pose),
         AnyMessage::PoseStamped(p) => pose2(&p.pose),

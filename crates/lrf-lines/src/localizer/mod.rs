@@ -301,7 +301,7 @@ impl Localizer {
             };
             let model = LaserLine {
                 observed: line.line,
-                covariance: line.covariance,
+                covariance: self.config.matching.line_noise(&line.covariance),
                 map_line: wall.line,
                 mount: self.config.laser_mount,
             };
