@@ -104,8 +104,12 @@ fn lap(localizer: &mut Localizer, seed: u64) -> Lap {
 
 #[test]
 fn a_lap_with_a_known_map_stays_accurate_and_consistent() {
+    // The map here is the simulation's own walls, exact: no map noise.
+    let mut exact = config();
+    exact.matching.map_sigma_r = 0.0;
+    exact.matching.map_sigma_psi = 0.0;
     let mut localizer =
-        Localizer::new(config(), start(), initial_covariance(), map_of(&walls())).unwrap();
+        Localizer::new(exact, start(), initial_covariance(), map_of(&walls())).unwrap();
     let lap = lap(&mut localizer, 1);
     let summary = format!(
         "max {:.4} m, rms {:.4} m, max heading {:.3}°, {}/{} scans fused, {} consistent, odometry alone {:.3} m",
@@ -163,8 +167,13 @@ fn a_lap_with_the_first_scan_map_stays_accurate() {
         localizer.map()
     );
     // The left wall is not in this map: facing it, the heading rests on the compass
-    // (σ = 2°) and the biased odometry alone, hence the looser heading bound.
-    assert!(lap.max_position_error < 0.08, "{summary}");
+    // (σ = 2°) and the biased odometry alone, hence the looser heading bound. The map is
+    // one noisy scan, and the default map noise (2 cm, 1°) says so: the filter leans on
+    // it less than on an exact map and stays consistent (without the map noise: max
+    // 4.2 cm but only 54 of 480 steps inside the 99 % bound; with it, measured: max
+    // 8.1 cm, rms 2.7 cm, 480 of 480).
+    assert!(lap.consistent_steps * 100 >= lap.scans * 95, "{summary}");
+    assert!(lap.max_position_error < 0.10, "{summary}");
     assert!(lap.rms_position_error < 0.03, "{summary}");
     assert!(lap.max_heading_error < 2.5_f64.to_radians(), "{summary}");
     assert!(lap.scans_with_fusion * 10 >= lap.scans * 9, "{summary}");

@@ -251,7 +251,7 @@ proptest! {
     ) {
         let map = LineMap::new(segments);
         let ekf = Ekf::new(Pose2::new(x, y, theta), Matrix3::from_diagonal(&Vector3::new(sxy, sxy, st))).unwrap();
-        let matcher = Matcher::new(MatchParams { gate_probability: params.0, min_overlap: params.1, min_overlap_fraction: params.2 }).unwrap();
+        let matcher = Matcher::new(MatchParams { gate_probability: params.0, min_overlap: params.1, min_overlap_fraction: params.2, ..MatchParams::default() }).unwrap();
         let mut out = MatchResult::new();
         matcher.match_lines(&observed, &map, &ekf, &mount(), &mut out);
         let walls: HashSet<usize> = out.matches().iter().map(|m| m.map).collect();
