@@ -65,10 +65,13 @@ fn walls_are_matched_despite_a_pose_offset_and_a_phantom_is_gated_out() {
     for m in out.matches() {
         assert_eq!(m.observed, m.map);
         assert!(m.innovation.nis <= 9.2104 && m.overlap > 0.0);
-        // The innovation is ekf-core's, at the predicted state.
+        // The innovation is ekf-core's, at the predicted state, with the observed line's
+        // covariance plus the map noise.
         let model = LaserLine::new(
             observed[m.observed].line,
-            observed[m.observed].covariance,
+            matcher()
+                .params()
+                .line_noise(&observed[m.observed].covariance),
             map.segments[m.map].line,
             mount(),
         )
