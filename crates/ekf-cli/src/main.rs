@@ -65,11 +65,19 @@ enum Command {
     /// Absolute and relative pose errors of a trajectory against a reference, as `evo`
     /// computes them (same frame, no alignment unless --align).
     Evaluate {
-        /// The estimated trajectory (TUM file).
+        /// The estimated trajectory: a TUM file, or an MCAP (its /ekf/pose, else
+        /// /ground_truth, unless --est-topic names one).
         estimate: PathBuf,
-        /// The reference trajectory (TUM file).
+        /// The reference trajectory: a TUM file, or an MCAP (its /ground_truth unless
+        /// --truth-topic names one).
         #[arg(long)]
         truth: PathBuf,
+        /// Pose topic of an MCAP estimate.
+        #[arg(long)]
+        est_topic: Option<String>,
+        /// Pose topic of an MCAP reference.
+        #[arg(long, default_value = "/ground_truth")]
+        truth_topic: String,
         /// Align the estimate to the reference first (rigid SE(2) Umeyama, as `evo -a`).
         #[arg(long)]
         align: bool,
@@ -371,11 +379,13 @@ fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
         Command::Evaluate {
             estimate,
             truth,
+            est_topic,
+            truth_topic,
             align,
             json,
         } => {
-            let est = evaluate::load_trajectory(&estimate)?;
-            let reference = evaluate::load_trajectory(&truth)?;
+            let est = evaluate::load_trajectory(&estimate, est_topic.as_deref())?;
+            let reference = evaluate::load_trajectory(&truth, Some(&truth_topic))?;
             let report = evaluate::evaluate(&est, &reference, align)?;
             if json {
                 println!("{}", serde_json::to_string_pretty(&report)?);

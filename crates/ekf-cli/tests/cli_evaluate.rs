@@ -65,3 +65,72 @@ fn missing_file_names_it_and_fails() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("no-such-estimate.txt"), "stderr: {err}");
 }
+
+#[test]
+fn mcap_and_tum_outputs_of_a_replay_evaluate_the_same() {
+    let dir = tempfile::tempdir().unwrap();
+    let (mcap, tum) = (dir.path().join("est.mcap"), dir.path().join("est.tum"));
+    let data = |f: &str| format!("{}/../../testdata/{f}", env!("CARGO_MANIFEST_DIR"));
+    let replay = Command::new(env!("CARGO_BIN_EXE_ekf"))
+        .args([
+            "replay",
+            &data("aces.mcap"),
+            "--map",
+            &data("aces-map.json"),
+            "--init-from-truth",
+            "--mode",
+            "laser",
+        ])
+        .arg("--out")
+        .arg(&mcap)
+        .arg("--tum")
+        .arg(&tum)
+        .output()
+        .unwrap();
+    assert!(
+        replay.status.success(),
+        "{}",
+        String::from_utf8_lossy(&replay.stderr)
+    );
+    let ate = |est: &std::path::Path| {
+        let out = Command::new(env!("CARGO_BIN_EXE_ekf"))
+            .arg("evaluate")
+            .arg(est)
+            .args(["--truth", &data("aces.mcap"), "--json"])
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        (
+            v["ape"]["translation_m"]["rmse"].as_f64().unwrap(),
+            v["ape"]["matched_poses"].as_u64().unwrap(),
+        )
+    };
+    let (from_mcap, from_tum) = (ate(&mcap), ate(&tum));
+    assert_eq!(from_mcap.1, 440);
+    assert_eq!(from_tum.1, 440);
+    assert!(
+        (from_mcap.0 - from_tum.0).abs() < 1e-9,
+        "{from_mcap:?} vs {from_tum:?}"
+    );
+    // A bag without a pose topic names the topics it has.
+    let out = Command::new(env!("CARGO_BIN_EXE_ekf"))
+        .args([
+            "evaluate",
+            &data("mrpt-office.mcap"),
+            "--truth",
+            &data("aces.mcap"),
+        ])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("no pose topic") && err.contains("/scan (sensor_msgs/msg/LaserScan)"),
+        "{err}"
+    );
+}

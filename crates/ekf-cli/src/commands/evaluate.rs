@@ -1,6 +1,9 @@
 //! `ekf evaluate EST --truth REF`: absolute and relative pose errors as `evo` defines them.
 
 use crate::eval::{ape, rpe, AlignMode, ApeOptions, ApeSummary, EvalError, RpeOptions, RpeSummary};
+use crate::mcap_io::{BagReader, MessageError, ReadError};
+use crate::replay::inputs::pose2;
+use crate::ros2::AnyMessage;
 use crate::trajectory::Trajectory;
 use crate::tum::{read_tum_file, TumError};
 use serde::Serialize;
@@ -16,7 +19,27 @@ pub enum EvaluateError {
     /// The trajectories could not be compared (no poses matched in time, …).
     #[error("{0}")]
     Eval(#[from] EvalError),
+    /// A bag could not be read.
+    #[error(transparent)]
+    Read(#[from] ReadError),
+    /// A message in a bag could not be decoded.
+    #[error(transparent)]
+    Message(#[from] MessageError),
+    /// A bag has none of the pose topics looked for.
+    #[error("{path}: no pose topic {wanted}; the bag has: {available}")]
+    NoPoseTopic {
+        /// The bag.
+        path: String,
+        /// The topics looked for.
+        wanted: String,
+        /// Its topics and types.
+        available: String,
+    },
 }
+
+/// Topics read from a bag, in this order of preference, unless one is named: the
+/// replay's estimate, then the log's reference.
+pub const POSE_TOPICS: [&str; 2] = ["/ekf/pose", "/ground_truth"];
 
 /// What `ekf evaluate` reports; `--json` prints it as JSON.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -27,9 +50,45 @@ pub struct EvaluationReport {
     pub rpe: RpeSummary,
 }
 
-/// Reads a trajectory file (TUM text).
-pub fn load_trajectory(path: &Path) -> Result<Trajectory, EvaluateError> {
-    Ok(read_tum_file(path)?)
+/// Reads a trajectory: a TUM text file, or a ROS 2 bag (`.mcap`) whose `topic` (default:
+/// the first of [`POSE_TOPICS`] it has) carries `geometry_msgs/PoseWithCovarianceStamped`,
+/// `geometry_msgs/PoseStamped` or `nav_msgs/Odometry`; stamps are log times.
+pub fn load_trajectory(path: &Path, topic: Option<&str>) -> Result<Trajectory, EvaluateError> {
+    if path.extension().is_none_or(|e| e != "mcap") {
+        return Ok(read_tum_file(path)?);
+    }
+    let bag = BagReader::open(path)?;
+    let has = |t: &str| bag.topics().iter().any(|i| i.topic == t);
+    let wanted: Vec<&str> = topic.map_or(POSE_TOPICS.to_vec(), |t| vec![t]);
+    let Some(topic) = wanted.iter().copied().find(|t| has(t)) else {
+        return Err(EvaluateError::NoPoseTopic {
+            path: path.display().to_string(),
+            wanted: wanted.join(" or "),
+            available: bag
+                .topics()
+                .iter()
+                .map(|t| format!("{} ({})", t.topic, t.type_name))
+                .collect::<Vec<_>>()
+                .join(", "),
+        });
+    };
+    let mut trajectory = Trajectory::default();
+    for message in bag.messages()? {
+        let message = message?;
+        if message.topic() != topic {
+            continue;
+        }
+        let pose = match message.decode()? {
+            AnyMessage::PoseWithCovarianceStamped(p) => pose2(&p.pose.pose),
+            AnyMessage::PoseStamped(p) => pose2(&p.pose),
+            AnyMessage::Odometry(o) => pose2(&o.pose.pose),
+            _ => None,
+        };
+        if let Some(pose) = pose {
+            trajectory.push(message.log_time, pose);
+        }
+    }
+    Ok(trajectory)
 }
 
 /// Compares `estimate` with `reference`: APE and RPE (delta 1 frame), in the same frame
