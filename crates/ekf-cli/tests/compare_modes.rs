@@ -42,7 +42,12 @@ fn four_modes_with_the_paper_ordering_of_accuracy() {
     assert_eq!(c.reference_poses, 601);
     for m in &c.modes {
         let run = m.run().unwrap_or_else(|| panic!("{} did not run", m.mode));
-        assert!(run.accuracy.matched_poses >= 590, "{}: {:?}", m.mode, run.accuracy);
+        assert!(
+            run.accuracy.matched_poses >= 590,
+            "{}: {:?}",
+            m.mode,
+            run.accuracy
+        );
         assert!(run.stopped_early.is_none());
     }
     let (odo, com, las, both) = (
@@ -64,7 +69,14 @@ fn four_modes_with_the_paper_ordering_of_accuracy() {
         "laser+compass {both:.6} m vs laser {las:.6} m\n{table}"
     );
     // The compass alone removes the heading drift of dead reckoning.
-    let heading = |mode: &str| c.mode(mode).unwrap().run().unwrap().accuracy.heading_rmse_deg;
+    let heading = |mode: &str| {
+        c.mode(mode)
+            .unwrap()
+            .run()
+            .unwrap()
+            .accuracy
+            .heading_rmse_deg
+    };
     assert!(heading("compass") < 0.1 * heading("odometry"), "{table}");
     // What each mode fused.
     let run = |mode: &str| c.mode(mode).unwrap().run().unwrap();
@@ -76,7 +88,13 @@ fn four_modes_with_the_paper_ordering_of_accuracy() {
     assert!(run("laser").lines_fused > 1000 && run("laser").compass_fused == 0);
     assert!(run("laser+compass").lines_fused > 1000 && run("laser+compass").compass_fused > 500);
     // The table names every mode and its numbers.
-    for name in ["odometry", "compass", "laser", "laser+compass", "/ground_truth"] {
+    for name in [
+        "odometry",
+        "compass",
+        "laser",
+        "laser+compass",
+        "/ground_truth",
+    ] {
         assert!(table.contains(name), "{table}");
     }
     assert!(table.contains(&format!("{odo:.3}")), "{table}");
@@ -113,7 +131,13 @@ fn inspect_svg(svg: &str) -> (Vec<String>, usize) {
     let lines = doc
         .descendants()
         .filter(|n| n.has_tag_name("polyline"))
-        .filter(|n| n.attribute("points").unwrap_or("").split_whitespace().count() > 2)
+        .filter(|n| {
+            n.attribute("points")
+                .unwrap_or("")
+                .split_whitespace()
+                .count()
+                > 2
+        })
         .count();
     (texts, lines)
 }
@@ -128,13 +152,24 @@ fn one_svg_holds_fig_9_and_fig_10() {
     // Fig. 9: the reference and four estimates; position error, x and y error: four each.
     assert_eq!(polylines, 5 + 3 * 4, "{texts:?}");
     for name in ["reference", "odometry", "compass", "laser", "laser+compass"] {
-        assert!(texts.iter().any(|t| t == name), "no legend entry {name}: {texts:?}");
+        assert!(
+            texts.iter().any(|t| t == name),
+            "no legend entry {name}: {texts:?}"
+        );
     }
     // The reference is in the trajectory panel's legend only; each mode in all four.
     assert_eq!(texts.iter().filter(|t| *t == "reference").count(), 1);
     assert_eq!(texts.iter().filter(|t| *t == "laser+compass").count(), 4);
-    for title in ["Fig. 9", "Deviation in X", "Deviation in Y", "Position error"] {
-        assert!(texts.iter().any(|t| t.contains(title)), "{title}: {texts:?}");
+    for title in [
+        "Fig. 9",
+        "Deviation in X",
+        "Deviation in Y",
+        "Position error",
+    ] {
+        assert!(
+            texts.iter().any(|t| t.contains(title)),
+            "{title}: {texts:?}"
+        );
     }
     // The same bytes as the writer form.
     let mut again = Vec::new();
@@ -156,9 +191,15 @@ fn a_log_without_reference_is_an_error_naming_the_topic() {
     let err = compare(&log, &Config::default(), &CompareOptions::default()).unwrap_err();
     assert!(matches!(err, CompareError::NoReference { ref topic, .. } if topic == "/ground_truth"));
     let message = err.to_string();
-    assert!(message.contains("reference") && message.contains("/ground_truth"), "{message}");
+    assert!(
+        message.contains("reference") && message.contains("/ground_truth"),
+        "{message}"
+    );
     // It lists what the log has instead.
-    assert!(message.contains("/scan") && message.contains("/joint_states"), "{message}");
+    assert!(
+        message.contains("/scan") && message.contains("/joint_states"),
+        "{message}"
+    );
 
     // A configured reference topic is the one looked for.
     let mut config = Config::default();
@@ -193,7 +234,10 @@ fn a_mode_that_cannot_run_is_reported_and_the_others_still_run() {
     assert_eq!(table.matches("not available").count(), 2, "{table}");
     let json = serde_json::to_value(&c).unwrap();
     assert_eq!(json["modes"][1]["status"], "unavailable");
-    assert!(json["modes"][1]["reason"].as_str().unwrap().contains("/compass"));
+    assert!(json["modes"][1]["reason"]
+        .as_str()
+        .unwrap()
+        .contains("/compass"));
 
     // The SVG has the modes that ran, and none of the others.
     let mut svg = Vec::new();

@@ -370,8 +370,10 @@ pub fn render_svg<W: Write>(comparison: &Comparison, writer: W) -> Result<(), Pl
             y_desc: "y estimated - y real [m]",
         },
     ];
+    let log = Path::new(&comparison.log);
+    let name = log.file_name().unwrap_or(log.as_os_str()).to_string_lossy();
     let options = PlotOptions {
-        title: format!("{}: four estimators against the reference", comparison.log),
+        title: format!("{name}: four estimators against the reference"),
         width: FIGURE_SIZE.0,
         height: FIGURE_SIZE.1,
     };

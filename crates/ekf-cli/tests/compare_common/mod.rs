@@ -93,7 +93,12 @@ impl Rng {
 fn command(t: f64) -> (f64, f64) {
     let turn = (0.3, FRAC_PI_2 / 2.5);
     let t = t.rem_euclid(40.0);
-    let phases = [(10.0, (0.4, 0.0)), (2.5, turn), (5.0, (0.4, 0.0)), (2.5, turn)];
+    let phases = [
+        (10.0, (0.4, 0.0)),
+        (2.5, turn),
+        (5.0, (0.4, 0.0)),
+        (2.5, turn),
+    ];
     let mut start = 0.0;
     for _ in 0..2 {
         for (duration, vw) in phases {
