@@ -12,15 +12,14 @@ use ekf_cli::replay::Mode;
 use std::path::Path;
 use std::sync::OnceLock;
 
-/// The full bag and its comparison, computed once for the tests that share them.
-fn full() -> &'static (tempfile::TempDir, Comparison) {
-    static FULL: OnceLock<(tempfile::TempDir, Comparison)> = OnceLock::new();
+/// The comparison of the full bag, computed once for the tests that share it.
+fn full() -> &'static Comparison {
+    static FULL: OnceLock<Comparison> = OnceLock::new();
     FULL.get_or_init(|| {
         let dir = tempfile::tempdir().unwrap();
         let log = dir.path().join("room.mcap");
         write_room_bag(&log, BagContents::default());
-        let comparison = compare(&log, &Config::default(), &CompareOptions::default()).unwrap();
-        (dir, comparison)
+        compare(&log, &Config::default(), &CompareOptions::default()).unwrap()
     })
 }
 
@@ -34,7 +33,7 @@ fn rmse(c: &Comparison, mode: &str) -> f64 {
 
 #[test]
 fn four_modes_with_the_paper_ordering_of_accuracy() {
-    let (_, c) = full();
+    let c = full();
     eprintln!("{}", c.to_table());
     let names: Vec<&str> = c.modes.iter().map(|m| m.mode.as_str()).collect();
     let expected: Vec<&str> = Mode::ALL.iter().map(|m| m.name()).collect();
@@ -102,7 +101,7 @@ fn four_modes_with_the_paper_ordering_of_accuracy() {
 
 #[test]
 fn json_has_one_entry_per_mode_with_status() {
-    let (_, c) = full();
+    let c = full();
     let v: serde_json::Value = serde_json::to_value(c).unwrap();
     let modes = v["modes"].as_array().unwrap();
     assert_eq!(modes.len(), 4);
@@ -144,7 +143,8 @@ fn inspect_svg(svg: &str) -> (Vec<String>, usize) {
 
 #[test]
 fn one_svg_holds_fig_9_and_fig_10() {
-    let (dir, c) = full();
+    let c = full();
+    let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("compare.svg");
     write_svg(c, &path).unwrap();
     let svg = std::fs::read_to_string(&path).unwrap();

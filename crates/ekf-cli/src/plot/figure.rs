@@ -127,3 +127,125 @@ pub fn plot_figure<W: Write>(
         Ok(())
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::trajectory::Trajectory;
+    use ekf_core::Pose2;
+
+    fn line(n: u64, slope: f64) -> Trajectory {
+        (0..n)
+            .map(|i| {
+                let x = i as f64 * 0.1;
+                crate::trajectory::StampedPose::new(i * 100_000_000, Pose2::new(x, slope * x, 0.0))
+            })
+            .collect()
+    }
+
+    /// (data lines, texts) of an SVG: polylines of more than two points.
+    fn inspect(svg: &[u8]) -> (usize, Vec<String>) {
+        let text = std::str::from_utf8(svg).unwrap();
+        let doc = roxmltree::Document::parse(text).unwrap();
+        let lines = doc
+            .descendants()
+            .filter(|n| n.has_tag_name("polyline"))
+            .filter(|n| {
+                n.attribute("points")
+                    .unwrap_or("")
+                    .split_whitespace()
+                    .count()
+                    > 2
+            })
+            .count();
+        let texts = doc
+            .descendants()
+            .filter(|n| n.has_tag_name("text"))
+            .filter_map(|n| n.text().map(|t| t.trim().to_owned()))
+            .collect();
+        (lines, texts)
+    }
+
+    #[test]
+    fn panels_on_a_grid_in_one_svg() {
+        let (truth, est) = (line(20, 0.0), line(20, 0.1));
+        let errors: Vec<(u64, f64)> = (0..20).map(|i| (i * 100_000_000, i as f64)).collect();
+        let estimates = [TrajectorySeries {
+            name: "est",
+            trajectory: &est,
+        }];
+        let series = [TimeSeries {
+            name: "err",
+            points: &errors,
+        }];
+        let panels = [
+            Panel::Trajectories {
+                title: "paths",
+                reference: Some(TrajectorySeries {
+                    name: "truth",
+                    trajectory: &truth,
+                }),
+                estimates: &estimates,
+            },
+            Panel::ErrorsOverTime {
+                title: "",
+                series: &series,
+                y_desc: "e [m]",
+            },
+            Panel::ErrorsOverTime {
+                title: "third",
+                series: &series,
+                y_desc: "e [m]",
+            },
+        ];
+        let mut svg = Vec::new();
+        let options = PlotOptions {
+            title: "all".into(),
+            width: 1000,
+            height: 800,
+        };
+        plot_figure(&mut svg, &panels, 2, &options).unwrap();
+        let (lines, texts) = inspect(&svg);
+        assert_eq!(lines, 4);
+        for t in ["all", "paths", "third", "truth", "est", "err", "e [m]"] {
+            assert!(texts.iter().any(|x| x == t), "{t}: {texts:?}");
+        }
+        assert_eq!(texts.iter().filter(|t| *t == "err").count(), 2);
+    }
+
+    #[test]
+    fn empty_panels_and_small_cells_are_errors() {
+        let options = PlotOptions::default();
+        assert!(matches!(
+            plot_figure(Vec::new(), &[], 2, &options),
+            Err(PlotError::NoData)
+        ));
+        let empty = [TimeSeries {
+            name: "none",
+            points: &[],
+        }];
+        let panel = Panel::ErrorsOverTime {
+            title: "",
+            series: &empty,
+            y_desc: "",
+        };
+        assert!(matches!(
+            plot_figure(Vec::new(), &[panel], 1, &options),
+            Err(PlotError::NoData)
+        ));
+        let points = [(0, 1.0), (1, 2.0)];
+        let some = [TimeSeries {
+            name: "some",
+            points: &points,
+        }];
+        let panel = Panel::ErrorsOverTime {
+            title: "",
+            series: &some,
+            y_desc: "",
+        };
+        // 900 px across is enough for one chart, not for ten side by side.
+        plot_figure(Vec::new(), &[panel], 1, &options).unwrap();
+        let err = plot_figure(Vec::new(), &[panel; 10], 10, &options);
+        assert!(matches!(err, Err(PlotError::TooSmall { .. })), "{err:?}");
+    }
+}
