@@ -4,7 +4,7 @@
 
 use clap::ValueEnum;
 use clap::{Parser, Subcommand};
-use ekf_cli::commands::{evaluate, import, map};
+use ekf_cli::commands::{compare, evaluate, import, map};
 use ekf_cli::config::{Config, DEFAULT_TOML};
 use ekf_cli::import::{CarmenFlavour, CarmenOptions, SyntheticCompass};
 use ekf_cli::replay::{self, Mode, ReplayOptions};
@@ -46,6 +46,28 @@ enum Command {
         #[arg(long)]
         tum: Option<PathBuf>,
         /// Print the summary as one JSON object.
+        #[arg(long)]
+        json: bool,
+    },
+    /// The paper's Fig. 9/10: replay a bag in all four modes (odometry, compass, laser,
+    /// laser+compass) and compare each estimate with the log's reference trajectory.
+    Compare {
+        /// The ROS 2 bag (.mcap); it needs a reference trajectory (topics.ground_truth).
+        log: PathBuf,
+        /// Configuration file (TOML); `ekf config` prints the defaults.
+        #[arg(long)]
+        config: Option<PathBuf>,
+        /// Line map (JSON). Without it the map is built from the first scan, as in the paper.
+        #[arg(long)]
+        map: Option<PathBuf>,
+        /// Start at the log's first reference pose instead of the configured initial pose.
+        #[arg(long)]
+        init_from_truth: bool,
+        /// Write one SVG with the trajectories (Fig. 9) and the position, x and y errors
+        /// over time (Fig. 10).
+        #[arg(long)]
+        svg: Option<PathBuf>,
+        /// Print one JSON object instead of a table.
         #[arg(long)]
         json: bool,
     },
@@ -339,6 +361,33 @@ fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
             }
             if let Some(failure) = outcome.failure {
                 return Err(failure.into());
+            }
+        }
+        Command::Compare {
+            log,
+            config,
+            map,
+            init_from_truth,
+            svg,
+            json,
+        } => {
+            let config = load_config(config.as_deref())?;
+            let options = compare::CompareOptions {
+                map,
+                init_from_truth,
+            };
+            let comparison = compare::compare(&log, &config, &options)?;
+            if json {
+                println!("{}", serde_json::to_string_pretty(&comparison)?);
+            } else {
+                print!("{}", comparison.to_table());
+            }
+            if comparison.runs().next().is_none() {
+                return Err("no mode could run on this log (see the reasons above)".into());
+            }
+            if let Some(path) = svg {
+                create_parent(&path)?;
+                compare::write_svg(&comparison, &path)?;
             }
         }
         Command::Import {

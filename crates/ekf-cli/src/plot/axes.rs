@@ -36,7 +36,7 @@ pub(super) const LABEL_SIZE: u32 = 18;
 /// Font size of the tick labels (px).
 pub(super) const TICK_SIZE: u32 = 15;
 /// Smallest width and height the frame above leaves room for (px).
-const MIN_SIZE: u32 = 2 * MARGIN + Y_LABEL_AREA + X_LABEL_AREA + 2 * TITLE_SIZE;
+pub(super) const MIN_SIZE: u32 = 2 * MARGIN + Y_LABEL_AREA + X_LABEL_AREA + 2 * TITLE_SIZE;
 
 /// Colour of the `index`-th estimate.
 pub(super) fn colour(index: usize) -> RGBColor {

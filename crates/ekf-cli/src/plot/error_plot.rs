@@ -3,7 +3,10 @@
 
 use super::axes::{build_chart, colour, draw_legend, draw_series, padded_range, render};
 use super::{PlotError, PlotOptions};
+use plotters::coord::Shift;
+use plotters::prelude::{DrawingArea, SVGBackend};
 use std::io::Write;
+use std::ops::Range;
 
 /// A named series of `(stamp in ns, value)` points, e.g. from
 /// [`crate::eval::Ape::errors`]: `ape.errors.iter().map(|e| (e.t_ns, e.dx))`.
@@ -28,6 +31,21 @@ pub fn plot_errors_over_time<W: Write>(
     y_desc: &str,
     options: &PlotOptions,
 ) -> Result<(), PlotError> {
+    let ranges = time_ranges(series)?;
+    render(writer, options, |area| {
+        draw_errors(area, &ranges, series, y_desc)
+    })
+}
+
+/// The earliest stamp and the time (s) and value ranges of `series`.
+pub(super) struct TimeRanges {
+    t0: u64,
+    x: Range<f64>,
+    y: Range<f64>,
+}
+
+/// The ranges of `series`; [`PlotError::NoData`] if no series has a finite value.
+pub(super) fn time_ranges(series: &[TimeSeries<'_>]) -> Result<TimeRanges, PlotError> {
     let t0 = series
         .iter()
         .flat_map(|s| s.points.iter().map(|&(t, _)| t))
@@ -40,12 +58,23 @@ pub fn plot_errors_over_time<W: Write>(
         .iter()
         .flat_map(|s| s.points.iter().map(|&(t, _)| seconds(t)));
     let x = padded_range(times).ok_or(PlotError::NoData)?;
-    render(writer, options, |area| {
-        let mut chart = build_chart(area, "time [s]", y_desc, |_| (x, y))?;
-        for (i, s) in series.iter().enumerate() {
-            let points = s.points.iter().map(|&(t, v)| (seconds(t), v));
-            draw_series(&mut chart, s.name, points, colour(i))?;
-        }
-        draw_legend(&mut chart)
-    })
+    Ok(TimeRanges { t0, x, y })
+}
+
+/// Draws the error chart on `area` (ranges from [`time_ranges`]).
+pub(super) fn draw_errors(
+    area: &DrawingArea<SVGBackend<'_>, Shift>,
+    ranges: &TimeRanges,
+    series: &[TimeSeries<'_>],
+    y_desc: &str,
+) -> Result<(), PlotError> {
+    let t0 = ranges.t0;
+    let seconds = |t: u64| (t - t0) as f64 * 1e-9;
+    let (x, y) = (ranges.x.clone(), ranges.y.clone());
+    let mut chart = build_chart(area, "time [s]", y_desc, |_| (x, y))?;
+    for (i, s) in series.iter().enumerate() {
+        let points = s.points.iter().map(|&(t, v)| (seconds(t), v));
+        draw_series(&mut chart, s.name, points, colour(i))?;
+    }
+    draw_legend(&mut chart)
 }

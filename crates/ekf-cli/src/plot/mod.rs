@@ -5,9 +5,11 @@
 
 mod axes;
 mod error_plot;
+mod figure;
 mod trajectory_plot;
 
 pub use error_plot::{plot_errors_over_time, TimeSeries};
+pub use figure::{plot_figure, Panel};
 pub use trajectory_plot::{plot_trajectories, TrajectorySeries};
 
 /// Size and title of a plot.

@@ -6,8 +6,11 @@ use super::axes::{
 };
 use super::{PlotError, PlotOptions};
 use crate::trajectory::Trajectory;
+use plotters::coord::Shift;
+use plotters::prelude::{DrawingArea, SVGBackend};
 use plotters::style::BLACK;
 use std::io::Write;
+use std::ops::Range;
 
 /// A trajectory with the name it gets in the legend.
 #[derive(Debug, Clone, Copy)]
@@ -31,24 +34,43 @@ pub fn plot_trajectories<W: Write>(
     estimates: &[TrajectorySeries<'_>],
     options: &PlotOptions,
 ) -> Result<(), PlotError> {
-    let all = || reference.iter().chain(estimates);
+    let ranges = trajectory_ranges(reference.as_ref(), estimates)?;
+    render(writer, options, |area| {
+        draw_trajectories(area, ranges, reference.as_ref(), estimates)
+    })
+}
+
+/// The x and y ranges holding every finite position; [`PlotError::NoData`] if none.
+pub(super) fn trajectory_ranges(
+    reference: Option<&TrajectorySeries<'_>>,
+    estimates: &[TrajectorySeries<'_>],
+) -> Result<(Range<f64>, Range<f64>), PlotError> {
+    let all = || reference.into_iter().chain(estimates);
     let positions = || all().flat_map(|s| s.trajectory.iter().map(|p| (p.pose.x, p.pose.y)));
     let x = padded_range(positions().map(|(x, _)| x)).ok_or(PlotError::NoData)?;
     let y = padded_range(positions().map(|(_, y)| y)).ok_or(PlotError::NoData)?;
-    render(writer, options, |area| {
-        let mut chart = build_chart(area, "x [m]", "y [m]", |size| equal_aspect(x, y, size))?;
-        let xy = |s: &TrajectorySeries<'_>| {
-            s.trajectory
-                .iter()
-                .map(|p| (p.pose.x, p.pose.y))
-                .collect::<Vec<_>>()
-        };
-        if let Some(r) = &reference {
-            draw_series(&mut chart, r.name, xy(r).into_iter(), BLACK)?;
-        }
-        for (i, e) in estimates.iter().enumerate() {
-            draw_series(&mut chart, e.name, xy(e).into_iter(), colour(i))?;
-        }
-        draw_legend(&mut chart)
-    })
+    Ok((x, y))
+}
+
+/// Draws the trajectory chart on `area` (ranges from [`trajectory_ranges`]).
+pub(super) fn draw_trajectories(
+    area: &DrawingArea<SVGBackend<'_>, Shift>,
+    (x, y): (Range<f64>, Range<f64>),
+    reference: Option<&TrajectorySeries<'_>>,
+    estimates: &[TrajectorySeries<'_>],
+) -> Result<(), PlotError> {
+    let mut chart = build_chart(area, "x [m]", "y [m]", |size| equal_aspect(x, y, size))?;
+    let xy = |s: &TrajectorySeries<'_>| {
+        s.trajectory
+            .iter()
+            .map(|p| (p.pose.x, p.pose.y))
+            .collect::<Vec<_>>()
+    };
+    if let Some(r) = reference {
+        draw_series(&mut chart, r.name, xy(r).into_iter(), BLACK)?;
+    }
+    for (i, e) in estimates.iter().enumerate() {
+        draw_series(&mut chart, e.name, xy(e).into_iter(), colour(i))?;
+    }
+    draw_legend(&mut chart)
 }
