@@ -88,3 +88,43 @@ fn mrpt_office_with_the_first_scan_map() {
     assert!(s.accuracy.is_none());
     assert_eq!(s.warning_count, 0, "{:?}", s.warnings);
 }
+
+#[test]
+fn aces_map_from_the_reference_and_from_the_first_scan() {
+    use ekf_cli::commands::map::{build_map, MapSource};
+    let config = Config::default();
+    let (map, s) = build_map(
+        &testdata("aces.mcap"),
+        &config,
+        MapSource::Reference(Default::default()),
+    )
+    .unwrap();
+    assert_eq!((s.scans_used, s.scans_skipped), (440, 0));
+    assert_eq!(s.laser_mount_source, "tf_static");
+    // The bundled map was made this way; building it again gives the same segments.
+    let bundled = std::fs::read_to_string(testdata("aces-map.json")).unwrap();
+    assert_eq!(map.to_json().unwrap(), bundled);
+    let (first, s) = build_map(
+        &testdata("aces.mcap"),
+        &config,
+        MapSource::FirstScan {
+            init_from_truth: true,
+        },
+    )
+    .unwrap();
+    assert_eq!(s.scans_used, 1);
+    assert_eq!(first.len() as u64, s.lines);
+    assert!(
+        first.len() >= 3 && first.len() < map.len(),
+        "{} segments",
+        first.len()
+    );
+    // Without a reference the map cannot be placed along it.
+    let err = build_map(
+        &testdata("mrpt-office.mcap"),
+        &config,
+        MapSource::Reference(Default::default()),
+    )
+    .unwrap_err();
+    assert!(err.to_string().contains("/ground_truth"), "{err}");
+}
