@@ -342,6 +342,7 @@ fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
                 init_from_truth,
                 out_mcap: out,
                 tum,
+                keep_trajectories: false,
             };
             let bar = progress_bar();
             let mut progress = |done: u64, total: u64| {

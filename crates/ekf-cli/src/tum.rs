@@ -6,7 +6,7 @@
 //! `1700000000.123456789` survives a round trip exactly (an `f64` holds only about 16
 //! significant digits).
 
-use crate::trajectory::Trajectory;
+use crate::trajectory::{StampedPose, Trajectory};
 use ekf_core::Pose2;
 use std::fs::File;
 use std::io::{self, BufRead, BufReader, BufWriter, Write};
@@ -127,20 +127,30 @@ pub fn read_tum_file(path: &Path) -> Result<Trajectory, TumError> {
 /// (`1700000000.000000001`); coordinates use the shortest decimal text that reads back
 /// to the same `f64`.
 pub fn write_tum<W: Write>(mut writer: W, trajectory: &Trajectory) -> io::Result<()> {
-    writeln!(writer, "# timestamp tx ty tz qx qy qz qw")?;
+    write_tum_header(&mut writer)?;
     for sample in trajectory {
-        let (qz, qw) = (0.5 * sample.pose.theta).sin_cos();
-        writeln!(
-            writer,
-            "{} {} {} 0 0 0 {} {}",
-            format_stamp(sample.t_ns),
-            sample.pose.x,
-            sample.pose.y,
-            qz,
-            qw
-        )?;
+        write_tum_row(&mut writer, sample)?;
     }
     writer.flush()
+}
+
+/// Writes the TUM header comment line, for a writer that streams rows.
+pub fn write_tum_header<W: Write>(mut writer: W) -> io::Result<()> {
+    writeln!(writer, "# timestamp tx ty tz qx qy qz qw")
+}
+
+/// Writes one TUM row (`t x y z qx qy qz qw`, planar: z = qx = qy = 0).
+pub fn write_tum_row<W: Write>(mut writer: W, sample: &StampedPose) -> io::Result<()> {
+    let (qz, qw) = (0.5 * sample.pose.theta).sin_cos();
+    writeln!(
+        writer,
+        "{} {} {} 0 0 0 {} {}",
+        format_stamp(sample.t_ns),
+        sample.pose.x,
+        sample.pose.y,
+        qz,
+        qw
+    )
 }
 
 /// Writes `trajectory` to the file at `path` (created or truncated; see [`write_tum`]).

@@ -18,6 +18,7 @@ fn run(log: &str, mode: Mode, map: Option<&str>) -> ReplaySummary {
         init_from_truth: map.is_some(),
         out_mcap: None,
         tum: None,
+        keep_trajectories: false,
     };
     let outcome = replay(&testdata(log), &Config::default(), &options, &mut |_, _| {}).unwrap();
     assert!(outcome.failure.is_none(), "{:?}", outcome.failure);

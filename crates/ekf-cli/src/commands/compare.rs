@@ -250,6 +250,7 @@ pub fn compare(
             init_from_truth: options.init_from_truth,
             out_mcap: None,
             tum: None,
+            keep_trajectories: true,
         };
         let outcome = match replay(log, config, &replay_options, &mut |_, _| {}) {
             Err(e) => ModeOutcome::Unavailable {

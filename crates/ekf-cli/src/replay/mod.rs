@@ -10,17 +10,17 @@
 //! A damaged log is processed up to the damage; the outputs are then finished and the
 //! failure is returned next to the results ([`ReplayOutcome::failure`]).
 
+pub mod accuracy;
 pub mod inputs;
 pub mod outputs;
+mod sink;
 pub mod summary;
 
 use crate::config::{Config, MotionSource};
-use crate::eval::{ape, ApeOptions};
 use crate::mcap_io::{BagMessage, BagReader, MessageError, ReadError, WriteError};
 use crate::ros2::geometry_msgs::TransformStamped;
 use crate::ros2::AnyMessage;
-use crate::trajectory::Trajectory;
-use crate::tum::write_tum;
+use crate::trajectory::{StampedPose, Trajectory};
 use ekf_core::Pose2;
 use inputs::{
     heading_from_imu, heading_from_magnetic_field, mount_from_tf, pose2, OdometryTracker, Skip,
@@ -29,7 +29,6 @@ use inputs::{
 use lrf_lines::{LineMap, Localizer, LocalizerError, ScanStage, StageClock};
 use nalgebra::Matrix3;
 use outputs::OutputBag;
-use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 pub use summary::ReplaySummary;
@@ -88,6 +87,9 @@ pub struct ReplayOptions {
     pub out_mcap: Option<PathBuf>,
     /// Output TUM trajectory.
     pub tum: Option<PathBuf>,
+    /// Keep the estimated and reference trajectories in memory (for plots); otherwise the
+    /// replay streams in memory that does not grow with the log.
+    pub keep_trajectories: bool,
 }
 
 /// Why a replay could not start or could not finish.
@@ -174,9 +176,10 @@ pub enum ReplayError {
 pub struct ReplayOutcome {
     /// Counts, timings, accuracy.
     pub summary: ReplaySummary,
-    /// The estimate at every motion step and scan.
+    /// The estimate at every motion step and scan (empty unless
+    /// [`ReplayOptions::keep_trajectories`]).
     pub trajectory: Trajectory,
-    /// The log's reference poses (empty if none).
+    /// The log's reference poses (empty if none, or unless kept).
     pub reference: Trajectory,
     /// Set when the log broke off (damage, a decode failure): everything before it was
     /// processed and the outputs are finished.
@@ -193,7 +196,7 @@ const REFERENCE: [&str; 2] = ["nav_msgs/msg/Odometry", "geometry_msgs/msg/PoseSt
 /// Times the scan stages with a monotonic clock.
 struct StageTimer {
     last: Instant,
-    samples: [Vec<f64>; 3],
+    stages: [summary::LatencyHistogram; 3],
 }
 
 impl StageClock for StageTimer {
@@ -206,7 +209,7 @@ impl StageClock for StageTimer {
             ScanStage::Matching => 1,
             ScanStage::Update => 2,
         };
-        self.samples[i].push(us);
+        self.stages[i].record(us);
     }
 }
 
@@ -361,13 +364,12 @@ pub fn replay(
         localizer: &mut localizer,
         out: out.as_mut(),
         summary: &mut summary,
-        trajectory: Trajectory::default(),
-        reference: Trajectory::default(),
+        poses: sink::PoseSink::new(options.tum.as_deref(), options.keep_trajectories)?,
         wheels: WheelTracker::new(&config.motion.left_joint, &config.motion.right_joint),
         odometry: OdometryTracker::default(),
         timer: StageTimer {
             last: Instant::now(),
-            samples: Default::default(),
+            stages: Default::default(),
         },
         map_written: false,
     };
@@ -394,54 +396,33 @@ pub fn replay(
     }
 
     // Finish every output, whatever happened above.
-    let Run {
-        trajectory,
-        reference,
-        timer,
-        ..
-    } = run;
+    let Run { poses, timer, .. } = run;
     if let Some(out) = out {
         out.finish()?;
     }
-    if let Some(path) = &options.tum {
-        write_tum_file(path, &trajectory)?;
-    }
+    let poses = poses.finish()?;
     summary.map_segments = localizer.map().len();
-    let [mut ext, mut mat, mut upd] = timer.samples;
+    let [ext, mat, upd] = &timer.stages;
     summary.timings = summary::Timings {
-        extraction: summary::StageTiming::from_samples(&mut ext),
-        matching: summary::StageTiming::from_samples(&mut mat),
-        update: summary::StageTiming::from_samples(&mut upd),
+        extraction: ext.timing(),
+        matching: mat.timing(),
+        update: upd.timing(),
     };
-    summary.poses_written = trajectory.len() as u64;
-    if !reference.is_empty() && !trajectory.is_empty() {
-        if let Ok(a) = ape(&reference, &trajectory, &ApeOptions::default()) {
-            let s = &a.summary;
-            summary.accuracy = Some(summary::Accuracy {
-                matched_poses: s.matched_poses,
-                position_rmse_m: s.translation_m.rmse,
-                position_max_m: s.translation_m.max,
-                heading_rmse_deg: s.heading_error_deg.rmse,
-            });
-        }
-    }
+    summary.poses_written = poses.written;
+    summary.accuracy = poses.accuracy.map(|a| summary::Accuracy {
+        matched_poses: a.matched,
+        position_rmse_m: a.position_rmse,
+        position_max_m: a.position_max,
+        heading_rmse_deg: a.heading_rmse.to_degrees(),
+    });
     summary.wall_time_s = started.elapsed().as_secs_f64();
+    let (trajectory, reference) = poses.kept.unwrap_or_default();
     Ok(ReplayOutcome {
         summary,
         trajectory,
         reference,
         failure,
     })
-}
-
-fn write_tum_file(path: &Path, trajectory: &Trajectory) -> Result<(), ReplayError> {
-    let tum_error = |source| ReplayError::Tum {
-        path: path.display().to_string(),
-        source,
-    };
-    let mut file = std::io::BufWriter::new(std::fs::File::create(path).map_err(tum_error)?);
-    write_tum(&mut file, trajectory).map_err(tum_error)?;
-    file.flush().map_err(tum_error)
 }
 
 /// The laser's mounting pose: `base_frame` → the scan's frame from `/tf_static` when
@@ -527,8 +508,7 @@ struct Run<'a> {
     localizer: &'a mut Localizer,
     out: Option<&'a mut OutputBag>,
     summary: &'a mut ReplaySummary,
-    trajectory: Trajectory,
-    reference: Trajectory,
+    poses: sink::PoseSink,
     wheels: WheelTracker,
     odometry: OdometryTracker,
     timer: StageTimer,
@@ -559,7 +539,7 @@ impl Run<'_> {
             self.compass(message)
         } else if topic == t.ground_truth {
             if let Some(pose) = reference_pose(message) {
-                self.reference.push(now, pose);
+                self.poses.reference(StampedPose::new(now, pose));
             } else {
                 self.summary.warn(
                     topic,
@@ -745,15 +725,7 @@ impl Run<'_> {
     /// A pose for the TUM trajectory and the output bag.
     fn record_pose(&mut self, now: u64) -> Result<(), ReplayError> {
         let pose = self.localizer.pose();
-        if self
-            .trajectory
-            .samples
-            .last()
-            .is_some_and(|s| s.t_ns == now)
-        {
-            self.trajectory.samples.pop();
-        }
-        self.trajectory.push(now, pose);
+        self.poses.estimate(StampedPose::new(now, pose))?;
         if let Some(out) = self.out.as_deref_mut() {
             out.pose(now, &pose, self.localizer.covariance())?;
         }

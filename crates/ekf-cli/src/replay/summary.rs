@@ -7,27 +7,68 @@ use std::collections::BTreeMap;
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
 pub struct StageTiming {
     /// Number of timed calls.
-    pub count: usize,
-    /// Median (µs).
+    pub count: u64,
+    /// Median (µs), to within 1 %.
     pub median_us: f64,
-    /// 99th percentile, nearest rank (µs).
+    /// 99th percentile (µs), to within 1 %.
     pub p99_us: f64,
 }
 
-impl StageTiming {
-    /// From durations in µs (reorders them).
-    pub fn from_samples(samples: &mut [f64]) -> Self {
-        if samples.is_empty() {
-            return Self::default();
-        }
-        samples.sort_by(f64::total_cmp);
-        let rank = |q: f64| {
-            samples[((q * samples.len() as f64).ceil() as usize).clamp(1, samples.len()) - 1]
-        };
+/// Durations in a fixed log-spaced histogram (bins 1 % wide from 0.01 µs to about
+/// 10 s), so that the percentiles of a replay of any length take constant memory.
+#[derive(Debug, Clone)]
+pub struct LatencyHistogram {
+    counts: Vec<u64>,
+    total: u64,
+}
+
+const LOWEST_US: f64 = 0.01;
+const GROWTH: f64 = 1.01;
+const BINS: usize = 2800;
+
+impl Default for LatencyHistogram {
+    fn default() -> Self {
         Self {
-            count: samples.len(),
-            median_us: rank(0.5),
-            p99_us: rank(0.99),
+            counts: vec![0; BINS],
+            total: 0,
+        }
+    }
+}
+
+impl LatencyHistogram {
+    /// Records one duration (µs).
+    pub fn record(&mut self, us: f64) {
+        let bin = if us > LOWEST_US {
+            ((us / LOWEST_US).ln() / GROWTH.ln()) as usize
+        } else {
+            0
+        };
+        self.counts[bin.min(BINS - 1)] += 1;
+        self.total += 1;
+    }
+
+    /// The nearest-rank quantile `q`, as the geometric centre of its bin (µs).
+    pub fn quantile(&self, q: f64) -> f64 {
+        let rank = ((q * self.total as f64).ceil() as u64).max(1);
+        let mut seen = 0;
+        for (i, &c) in self.counts.iter().enumerate() {
+            seen += c;
+            if seen >= rank {
+                return LOWEST_US * GROWTH.powf(i as f64 + 0.5);
+            }
+        }
+        0.0
+    }
+
+    /// Count, median and 99th percentile.
+    pub fn timing(&self) -> StageTiming {
+        if self.total == 0 {
+            return StageTiming::default();
+        }
+        StageTiming {
+            count: self.total,
+            median_us: self.quantile(0.5),
+            p99_us: self.quantile(0.99),
         }
     }
 }
@@ -156,10 +197,19 @@ mod tests {
     use super::*;
 
     #[test]
-    fn nearest_rank_percentiles() {
-        let mut v: Vec<f64> = (1..=200).rev().map(f64::from).collect();
-        let t = StageTiming::from_samples(&mut v);
-        assert_eq!((t.count, t.median_us, t.p99_us), (200, 100.0, 198.0));
-        assert_eq!(StageTiming::from_samples(&mut []), StageTiming::default());
+    fn percentiles_within_one_percent() {
+        let mut h = LatencyHistogram::default();
+        for v in (1..=200).rev() {
+            h.record(f64::from(v));
+        }
+        let t = h.timing();
+        assert_eq!(t.count, 200);
+        assert!((t.median_us / 100.0 - 1.0).abs() < 0.01, "{t:?}");
+        assert!((t.p99_us / 198.0 - 1.0).abs() < 0.01, "{t:?}");
+        assert_eq!(LatencyHistogram::default().timing(), StageTiming::default());
+        // Out-of-range values land in the end bins instead of panicking.
+        h.record(0.0);
+        h.record(1e12);
+        assert_eq!(h.timing().count, 202);
     }
 }
