@@ -45,7 +45,7 @@ pub const FILLER_TOPIC: &str = "/lidar3d/scan";
 pub const BEAMS: usize = 361;
 
 /// A planar pose.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct P2 {
     pub x: f64,
     pub y: f64,
@@ -365,7 +365,7 @@ pub fn build(s: &Scenario) -> Vec<Item> {
     let rel = |t_ns: u64| (t_ns - T0_NS) as f64 * 1e-9;
     let mut rng = Rng::new(s.seed);
     let mut items = Vec::new();
-    let mut push = |items: &mut Vec<Item>, t_ns: u64, topic: &str, msg: AnyMessage| {
+    let push = |items: &mut Vec<Item>, t_ns: u64, topic: &str, msg: AnyMessage| {
         items.push(Item {
             t_ns,
             topic: topic.into(),
