@@ -86,6 +86,13 @@ impl WheelTracker {
         if !(pl.is_finite() && pr.is_finite()) {
             return Ok(Err(Skip::NonFinite { field: "position" }));
         }
+        let velocity = (msg.velocity.get(l).copied(), msg.velocity.get(r).copied());
+        if let (Some(vl), Some(vr)) = velocity {
+            // Checked before the start moves: the next reading then covers this interval.
+            if !(vl.is_finite() && vr.is_finite()) {
+                return Ok(Err(Skip::NonFinite { field: "velocity" }));
+            }
+        }
         let previous = self.previous.replace((stamp_ns, pl, pr));
         let Some((t0, pl0, pr0)) = previous else {
             return Ok(Err(Skip::First));
@@ -98,12 +105,10 @@ impl WheelTracker {
             }));
         }
         let dt = (stamp_ns - t0) as f64 * 1e-9;
-        let velocity = (msg.velocity.get(l).copied(), msg.velocity.get(r).copied());
         Ok(match velocity {
-            (Some(vl), Some(vr)) if vl.is_finite() && vr.is_finite() => {
+            (Some(vl), Some(vr)) => {
                 WheelSpeeds::new(vl, vr, dt).map_err(|_| Skip::NonFinite { field: "velocity" })
             }
-            (Some(_), Some(_)) => Err(Skip::NonFinite { field: "velocity" }),
             _ => WheelSpeeds::from_increments(pl - pl0, pr - pr0, dt)
                 .map_err(|_| Skip::NonFinite { field: "position" }),
         })
@@ -122,6 +127,9 @@ impl WheelTracker {
                 field: "velocity (missing)",
             });
         };
+        if !(vl.is_finite() && vr.is_finite()) {
+            return Err(Skip::NonFinite { field: "velocity" });
+        }
         let previous = self.previous.replace((stamp_ns, 0.0, 0.0));
         let Some((t0, _, _)) = previous else {
             return Err(Skip::First);
@@ -313,6 +321,21 @@ mod tests {
             .unwrap(),
             Err(Skip::NonFinite { field: "position" })
         );
+        // A NaN velocity is skipped without moving the start either: the next reading
+        // covers the skipped interval (positions differentiated from 200 ms).
+        assert_eq!(
+            w.speeds(
+                300_000_000,
+                &joints(&["l", "r"], vec![0.4, 0.6], vec![f64::NAN, 1.0])
+            )
+            .unwrap(),
+            Err(Skip::NonFinite { field: "velocity" })
+        );
+        let s = w
+            .speeds(400_000_000, &joints(&["l", "r"], vec![0.5, 0.7], vec![]))
+            .unwrap()
+            .unwrap();
+        assert!((s.left - 1.0).abs() < 1e-12 && (s.dt - 0.2).abs() < 1e-15);
         assert_eq!(
             w.speeds(300_000_000, &joints(&["a", "b"], vec![0.0, 0.0], vec![])),
             Err(vec!["a".to_string(), "b".to_string()])
