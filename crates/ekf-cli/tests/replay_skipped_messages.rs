@@ -308,3 +308,42 @@ fn nan_odometry_poses_are_skipped_and_lose_no_motion() {
         "end pose {b:?} instead of {a:?}"
     );
 }
+
+#[test]
+fn an_imu_without_orientation_is_not_fused() {
+    // sensor_msgs/Imu: -1 in orientation_covariance[0] means "no orientation estimate";
+    // such a message (here with the all-zero quaternion such IMUs send, whose yaw would
+    // read as 0) must be skipped, not fused as a heading of 0.
+    let dir = tempfile::tempdir().expect("tempdir");
+    let clean = build(&short(MotionTopic::Joints));
+    let mut bad = clean.clone();
+    for k in [2, 4] {
+        poison(&mut bad, "/compass", compass_stamp(k), |m| {
+            if let AnyMessage::Imu(imu) = m {
+                imu.orientation = ekf_cli::ros2::geometry_msgs::Quaternion {
+                    x: 0.0,
+                    y: 0.0,
+                    z: 0.0,
+                    w: 0.0,
+                };
+                imu.orientation_covariance = [0.0; 9];
+                imu.orientation_covariance[0] = -1.0;
+            }
+        });
+    }
+    let (s_clean, _) = run(dir.path(), "clean", &clean, "compass");
+    let (s, _) = run(dir.path(), "no_orientation", &bad, "compass");
+    let reason = "orientation not provided (orientation_covariance[0] = -1)";
+    assert_eq!(
+        s["warnings"],
+        json!([
+            {"topic": "/compass", "log_time_ns": compass_stamp(2), "reason": reason},
+            {"topic": "/compass", "log_time_ns": compass_stamp(4), "reason": reason},
+        ])
+    );
+    let fused = |s: &Value| {
+        s["compass"]["accepted"].as_u64().expect("accepted")
+            + s["compass"]["rejected"].as_u64().expect("rejected")
+    };
+    assert_eq!(fused(&s) + 2, fused(&s_clean));
+}

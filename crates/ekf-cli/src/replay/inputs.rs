@@ -22,6 +22,11 @@ pub enum Skip {
         /// The field.
         field: &'static str,
     },
+    /// The message says it has no such estimate (ROS: −1 in element 0 of its covariance).
+    NotProvided {
+        /// The field.
+        field: &'static str,
+    },
     /// The first message of a differentiated or delta stream only sets the start.
     First,
 }
@@ -45,6 +50,9 @@ impl std::fmt::Display for Skip {
                 )
             }
             Skip::NonFinite { field } => write!(f, "{field} is not finite"),
+            Skip::NotProvided { field } => {
+                write!(f, "{field} not provided ({field}_covariance[0] = -1)")
+            }
             Skip::First => write!(f, "first message sets the start"),
         }
     }
@@ -187,20 +195,26 @@ pub struct Heading {
 }
 
 /// An `Imu`'s yaw (already ENU) rotated into the map frame; its variance from
-/// `orientation_covariance[8]` unless the covariance is "not provided" (−1 in element 0)
-/// or not positive.
+/// `orientation_covariance[8]` when that is positive (all zeros: unknown, `None`). An
+/// `Imu` with −1 in `orientation_covariance[0]` has no orientation estimate (as
+/// `sensor_msgs/Imu` defines it) and is skipped.
 pub fn heading_from_imu(
     msg: &Imu,
     calibration: &CompassCalibrationConfig,
 ) -> Result<Heading, Skip> {
+    let c = &msg.orientation_covariance;
+    if c[0] == -1.0 {
+        return Err(Skip::NotProvided {
+            field: "orientation",
+        });
+    }
     let yaw = msg.orientation.yaw();
     if !yaw.is_finite() {
         return Err(Skip::NonFinite {
             field: "orientation",
         });
     }
-    let c = &msg.orientation_covariance;
-    let variance = (c[0] != -1.0 && c[8].is_finite() && c[8] > 0.0).then_some(c[8]);
+    let variance = (c[8].is_finite() && c[8] > 0.0).then_some(c[8]);
     Ok(Heading {
         heading: wrap_angle(yaw + calibration.map_offset),
         variance,
@@ -390,8 +404,14 @@ mod tests {
         )
         .unwrap();
         assert!((h.heading - 0.2).abs() < 1e-12 && h.variance == Some(4e-4));
-        imu.orientation_covariance[0] = -1.0;
+        imu.orientation_covariance[8] = 0.0;
         assert_eq!(heading_from_imu(&imu, &cal).unwrap().variance, None);
+        imu.orientation_covariance[0] = -1.0;
+        let skip = heading_from_imu(&imu, &cal).unwrap_err();
+        assert_eq!(
+            skip.to_string(),
+            "orientation not provided (orientation_covariance[0] = -1)"
+        );
     }
 
     #[test]
