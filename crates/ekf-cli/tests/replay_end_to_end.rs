@@ -7,6 +7,7 @@
 mod replay_support;
 
 use ekf_cli::mcap_io::BagReader;
+use ekf_cli::ros2::diagnostic_msgs::DiagnosticArray;
 use ekf_cli::ros2::geometry_msgs::PoseWithCovarianceStamped;
 use ekf_cli::ros2::visualization_msgs::MarkerArray;
 use nalgebra::{Matrix3, SymmetricEigen};
@@ -159,6 +160,7 @@ fn output_bag_has_poses_with_valid_covariances_markers_map_and_diagnostics() {
     assert!(map_segments >= 3, "map of {map_segments} segments");
     let bag = BagReader::open(&out).expect("output bag opens");
     let mut previous = 0;
+    let mut statuses = std::collections::BTreeMap::<String, u64>::new();
     for m in bag.messages().expect("stream") {
         let m = m.expect("message");
         assert!(m.log_time >= previous);
@@ -199,9 +201,31 @@ fn output_bag_has_poses_with_valid_covariances_markers_map_and_diagnostics() {
                     assert!(off < 0.1, "map end point {p:?} is {off} m off the walls");
                 }
             }
+            "/ekf/markers" => {
+                let a: MarkerArray = m.decode_as().expect("markers decode");
+                let ns: Vec<&str> = a.markers.iter().map(|k| k.ns.as_str()).collect();
+                assert_eq!(ns, ["extracted", "matched", "covariance_2sigma"]);
+                assert!(a
+                    .markers
+                    .iter()
+                    .all(|k| k.points.iter().all(|q| q.x.is_finite())));
+            }
+            "/ekf/diagnostics" => {
+                let d: DiagnosticArray = m.decode_as().expect("diagnostics decode");
+                assert_eq!(d.status.len(), 1);
+                *statuses.entry(d.status[0].name.clone()).or_default() += 1;
+            }
             _ => {}
         }
     }
+    assert_eq!(
+        statuses,
+        [
+            ("ekf/compass".to_string(), compass),
+            ("ekf/scan".to_string(), scans)
+        ]
+        .into()
+    );
 }
 
 #[test]
