@@ -32,10 +32,12 @@ pub enum ConfigError {
         message: String,
     },
     /// A value is out of range.
-    #[error("{path}: {key}: {message}")]
+    #[error("{path}: {}{key}: {message}", line.map(|l| format!("line {l}: ")).unwrap_or_default())]
     Invalid {
         /// The file.
         path: String,
+        /// 1-based line of the key (or of its table) when the file sets it.
+        line: Option<usize>,
         /// The offending key, dotted (`localizer.robot.track`).
         key: String,
         /// What was expected.
@@ -193,7 +195,17 @@ impl Config {
             path: path.into(),
             message: e.to_string().trim_end().to_string(),
         })?;
-        config.validated(path)
+        config.validated(path).map_err(|e| match e {
+            ConfigError::Invalid {
+                path, key, message, ..
+            } => ConfigError::Invalid {
+                line: line_of(text, &key),
+                path,
+                key,
+                message,
+            },
+            other => other,
+        })
     }
 
     /// Reads and parses a TOML file.
@@ -211,6 +223,7 @@ impl Config {
     pub fn validated(self, path: &str) -> Result<Self, ConfigError> {
         let invalid = |key: &str, message: &str| ConfigError::Invalid {
             path: path.into(),
+            line: None,
             key: key.into(),
             message: message.into(),
         };
@@ -284,6 +297,26 @@ impl Config {
     }
 }
 
+/// The 1-based line where `text` sets the dotted `key`, or the deepest table of it that
+/// the text has; `None` when the text sets none of it (the value is a default).
+fn line_of(text: &str, key: &str) -> Option<usize> {
+    use toml::de::{DeTable, DeValue};
+    let root = DeTable::parse(text).ok()?;
+    let mut table = root.get_ref();
+    let mut start = None;
+    for part in key.split('.') {
+        let Some((k, v)) = table.iter().find(|(k, _)| k.get_ref().as_ref() == part) else {
+            break;
+        };
+        start = Some(k.span().start);
+        match v.get_ref() {
+            DeValue::Table(t) => table = t,
+            _ => break,
+        }
+    }
+    start.map(|s| text[..s].matches('\n').count() + 1)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -316,7 +349,14 @@ mod tests {
         .to_string();
         assert_eq!(
             err,
-            "r.toml: localizer.robot.wheel_radius: expected a finite number > 0, found -0.05"
+            "r.toml: line 2: localizer.robot.wheel_radius: expected a finite number > 0, found -0.05"
+        );
+        let err = Config::from_toml("[initial]\nx = 1.0\n\nsigma_theta = 0.0\n", "i.toml")
+            .unwrap_err()
+            .to_string();
+        assert_eq!(
+            err,
+            "i.toml: line 4: initial.sigma_theta: expected a finite number > 0, found 0"
         );
         let err = Config::from_toml("[localizer.extraction]\nsplit_distanse = 0.1\n", "t.toml")
             .unwrap_err()

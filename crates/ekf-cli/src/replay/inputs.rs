@@ -22,6 +22,11 @@ pub enum Skip {
         /// The field.
         field: &'static str,
     },
+    /// The message says it has no such estimate (ROS: −1 in element 0 of its covariance).
+    NotProvided {
+        /// The field.
+        field: &'static str,
+    },
     /// The first message of a differentiated or delta stream only sets the start.
     First,
 }
@@ -45,6 +50,9 @@ impl std::fmt::Display for Skip {
                 )
             }
             Skip::NonFinite { field } => write!(f, "{field} is not finite"),
+            Skip::NotProvided { field } => {
+                write!(f, "{field} not provided ({field}_covariance[0] = -1)")
+            }
             Skip::First => write!(f, "first message sets the start"),
         }
     }
@@ -86,6 +94,13 @@ impl WheelTracker {
         if !(pl.is_finite() && pr.is_finite()) {
             return Ok(Err(Skip::NonFinite { field: "position" }));
         }
+        let velocity = (msg.velocity.get(l).copied(), msg.velocity.get(r).copied());
+        if let (Some(vl), Some(vr)) = velocity {
+            // Checked before the start moves: the next reading then covers this interval.
+            if !(vl.is_finite() && vr.is_finite()) {
+                return Ok(Err(Skip::NonFinite { field: "velocity" }));
+            }
+        }
         let previous = self.previous.replace((stamp_ns, pl, pr));
         let Some((t0, pl0, pr0)) = previous else {
             return Ok(Err(Skip::First));
@@ -98,12 +113,10 @@ impl WheelTracker {
             }));
         }
         let dt = (stamp_ns - t0) as f64 * 1e-9;
-        let velocity = (msg.velocity.get(l).copied(), msg.velocity.get(r).copied());
         Ok(match velocity {
-            (Some(vl), Some(vr)) if vl.is_finite() && vr.is_finite() => {
+            (Some(vl), Some(vr)) => {
                 WheelSpeeds::new(vl, vr, dt).map_err(|_| Skip::NonFinite { field: "velocity" })
             }
-            (Some(_), Some(_)) => Err(Skip::NonFinite { field: "velocity" }),
             _ => WheelSpeeds::from_increments(pl - pl0, pr - pr0, dt)
                 .map_err(|_| Skip::NonFinite { field: "position" }),
         })
@@ -122,6 +135,9 @@ impl WheelTracker {
                 field: "velocity (missing)",
             });
         };
+        if !(vl.is_finite() && vr.is_finite()) {
+            return Err(Skip::NonFinite { field: "velocity" });
+        }
         let previous = self.previous.replace((stamp_ns, 0.0, 0.0));
         let Some((t0, _, _)) = previous else {
             return Err(Skip::First);
@@ -179,20 +195,26 @@ pub struct Heading {
 }
 
 /// An `Imu`'s yaw (already ENU) rotated into the map frame; its variance from
-/// `orientation_covariance[8]` unless the covariance is "not provided" (−1 in element 0)
-/// or not positive.
+/// `orientation_covariance[8]` when that is positive (all zeros: unknown, `None`). An
+/// `Imu` with −1 in `orientation_covariance[0]` has no orientation estimate (as
+/// `sensor_msgs/Imu` defines it) and is skipped.
 pub fn heading_from_imu(
     msg: &Imu,
     calibration: &CompassCalibrationConfig,
 ) -> Result<Heading, Skip> {
+    let c = &msg.orientation_covariance;
+    if c[0] == -1.0 {
+        return Err(Skip::NotProvided {
+            field: "orientation",
+        });
+    }
     let yaw = msg.orientation.yaw();
     if !yaw.is_finite() {
         return Err(Skip::NonFinite {
             field: "orientation",
         });
     }
-    let c = &msg.orientation_covariance;
-    let variance = (c[0] != -1.0 && c[8].is_finite() && c[8] > 0.0).then_some(c[8]);
+    let variance = (c[8].is_finite() && c[8] > 0.0).then_some(c[8]);
     Ok(Heading {
         heading: wrap_angle(yaw + calibration.map_offset),
         variance,
@@ -313,6 +335,21 @@ mod tests {
             .unwrap(),
             Err(Skip::NonFinite { field: "position" })
         );
+        // A NaN velocity is skipped without moving the start either: the next reading
+        // covers the skipped interval (positions differentiated from 200 ms).
+        assert_eq!(
+            w.speeds(
+                300_000_000,
+                &joints(&["l", "r"], vec![0.4, 0.6], vec![f64::NAN, 1.0])
+            )
+            .unwrap(),
+            Err(Skip::NonFinite { field: "velocity" })
+        );
+        let s = w
+            .speeds(400_000_000, &joints(&["l", "r"], vec![0.5, 0.7], vec![]))
+            .unwrap()
+            .unwrap();
+        assert!((s.left - 1.0).abs() < 1e-12 && (s.dt - 0.2).abs() < 1e-15);
         assert_eq!(
             w.speeds(300_000_000, &joints(&["a", "b"], vec![0.0, 0.0], vec![])),
             Err(vec!["a".to_string(), "b".to_string()])
@@ -367,8 +404,14 @@ mod tests {
         )
         .unwrap();
         assert!((h.heading - 0.2).abs() < 1e-12 && h.variance == Some(4e-4));
-        imu.orientation_covariance[0] = -1.0;
+        imu.orientation_covariance[8] = 0.0;
         assert_eq!(heading_from_imu(&imu, &cal).unwrap().variance, None);
+        imu.orientation_covariance[0] = -1.0;
+        let skip = heading_from_imu(&imu, &cal).unwrap_err();
+        assert_eq!(
+            skip.to_string(),
+            "orientation not provided (orientation_covariance[0] = -1)"
+        );
     }
 
     #[test]

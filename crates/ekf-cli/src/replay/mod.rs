@@ -238,11 +238,16 @@ pub fn replay(
             .map(|t| t.type_name.clone())
     };
     let available = || {
-        bag.topics()
+        let list = bag
+            .topics()
             .iter()
             .map(|t| format!("{} ({})", t.topic, t.type_name))
-            .collect::<Vec<_>>()
-            .join(", ")
+            .collect::<Vec<_>>();
+        if list.is_empty() {
+            "no topics".to_owned()
+        } else {
+            list.join(", ")
+        }
     };
     let missing = |topic: &str, role: &'static str| ReplayError::MissingTopic {
         log: log_name.clone(),
@@ -274,14 +279,16 @@ pub fn replay(
     };
     let motion_topic = if use_joints { &t.joint_states } else { &t.odom };
     if topic_type(motion_topic).is_none() {
-        return Err(missing(
-            motion_topic,
-            if use_joints {
-                "wheel joint states"
-            } else {
-                "odometry"
-            },
-        ));
+        // With `auto`, neither topic is there: name both, not just the fallback.
+        let (topic, role) = match config.motion.source {
+            MotionSource::Auto => (
+                format!("{} or {}", t.joint_states, t.odom),
+                "wheel joint states or odometry",
+            ),
+            MotionSource::JointStates => (motion_topic.clone(), "wheel joint states"),
+            MotionSource::Odom => (motion_topic.clone(), "odometry"),
+        };
+        return Err(missing(&topic, role));
     }
     check_type(
         &t.joint_states,
