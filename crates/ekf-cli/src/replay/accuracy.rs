@@ -1,8 +1,8 @@
-//! Accuracy against the reference, computed while the replay streams, in bounded memory:
-//! each reference pose is paired with the estimated pose nearest in time within 10 ms
-//! (`evo`'s association when the reference is the sparser trajectory, as it is for a
-//! filter that publishes at every motion step), then `evo`'s APE statistics without
-//! alignment. Only the estimates of the last few tens of milliseconds are kept.
+//! Accuracy against the reference, computed while the replay streams, in bounded memory,
+//! as `evo_ape` computes it without alignment: each pose of the trajectory with fewer
+//! poses is paired with the nearest pose of the other within 10 ms. Both pairings run
+//! side by side (only the last tens of milliseconds of poses are held) and the one `evo`
+//! would pick is reported at the end.
 
 use crate::trajectory::StampedPose;
 use ekf_core::angle_diff;
@@ -11,21 +11,95 @@ use std::collections::VecDeque;
 /// Largest time difference of a pair (ns), as `evo`'s default `max_diff` of 0.01 s.
 pub const MAX_DIFF_NS: u64 = 10_000_000;
 
-/// Running sums of the pose errors.
+/// One direction of the pairing: each *query* pose is paired with the nearest
+/// *candidate* within [`MAX_DIFF_NS`] (ties: the earlier candidate).
 #[derive(Debug, Clone, Default)]
-pub struct OnlineAccuracy {
-    estimates: VecDeque<StampedPose>,
+struct Pairing {
+    candidates: VecDeque<StampedPose>,
     pending: VecDeque<StampedPose>,
+    queries: usize,
+    sums: Sums,
+}
+
+/// Running sums of the pose errors of the pairs.
+#[derive(Debug, Clone, Copy, Default)]
+struct Sums {
     matched: usize,
     sum_sq_position: f64,
     max_position: f64,
     sum_sq_heading: f64,
 }
 
+impl Pairing {
+    fn query(&mut self, sample: StampedPose) {
+        self.queries += 1;
+        self.pending.push_back(sample);
+    }
+
+    fn candidate(&mut self, sample: StampedPose) {
+        self.candidates.push_back(sample);
+    }
+
+    /// Everything later than `now` is in the future: a pending query older than
+    /// `now − MAX_DIFF` has seen all its candidates; older candidates can go.
+    fn advance(&mut self, now: u64) {
+        while self
+            .pending
+            .front()
+            .is_some_and(|q| q.t_ns + MAX_DIFF_NS < now)
+        {
+            if let Some(q) = self.pending.pop_front() {
+                self.pair(&q);
+            }
+        }
+        let horizon = self
+            .pending
+            .front()
+            .map_or(now, |q| q.t_ns.min(now))
+            .saturating_sub(MAX_DIFF_NS);
+        while self.candidates.front().is_some_and(|c| c.t_ns < horizon) {
+            self.candidates.pop_front();
+        }
+    }
+
+    fn finish(mut self) -> (usize, Sums) {
+        while let Some(q) = self.pending.pop_front() {
+            self.pair(&q);
+        }
+        (self.queries, self.sums)
+    }
+
+    fn pair(&mut self, q: &StampedPose) {
+        let Some(c) = self
+            .candidates
+            .iter()
+            .filter(|c| c.t_ns.abs_diff(q.t_ns) <= MAX_DIFF_NS)
+            .min_by_key(|c| c.t_ns.abs_diff(q.t_ns))
+        else {
+            return;
+        };
+        let d = ((c.pose.x - q.pose.x).powi(2) + (c.pose.y - q.pose.y).powi(2)).sqrt();
+        let s = &mut self.sums;
+        s.matched += 1;
+        s.sum_sq_position += d * d;
+        s.max_position = s.max_position.max(d);
+        s.sum_sq_heading += angle_diff(c.pose.theta, q.pose.theta).powi(2);
+    }
+}
+
+/// The pairing in both directions, so that at the end the one `evo` would use is known:
+/// from the trajectory with fewer poses (the estimate when the counts are equal).
+#[derive(Debug, Clone, Default)]
+pub struct OnlineAccuracy {
+    by_reference: Pairing,
+    by_estimate: Pairing,
+    now: u64,
+}
+
 /// The result: matched pairs, position RMSE and maximum (m), heading RMSE (rad).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct AccuracyTotals {
-    /// Reference poses paired with an estimate.
+    /// Pairs of poses.
     pub matched: usize,
     /// Position RMSE (m).
     pub position_rmse: f64,
@@ -36,65 +110,44 @@ pub struct AccuracyTotals {
 }
 
 impl OnlineAccuracy {
-    /// An estimated pose (in non-decreasing time).
+    /// An estimated pose (estimates and references together in non-decreasing time).
     pub fn estimate(&mut self, sample: StampedPose) {
-        self.estimates.push_back(sample);
-        // A pending reference more than MAX_DIFF before this estimate has seen every
-        // candidate it can be paired with.
-        while self
-            .pending
-            .front()
-            .is_some_and(|r| r.t_ns + MAX_DIFF_NS < sample.t_ns)
-        {
-            if let Some(r) = self.pending.pop_front() {
-                self.pair(&r);
-            }
-        }
-        let horizon = self
-            .pending
-            .front()
-            .map_or(sample.t_ns, |r| r.t_ns.min(sample.t_ns))
-            .saturating_sub(MAX_DIFF_NS);
-        while self.estimates.len() > 1 && self.estimates.front().is_some_and(|e| e.t_ns < horizon) {
-            self.estimates.pop_front();
-        }
+        self.by_reference.candidate(sample);
+        self.by_estimate.query(sample);
+        self.advance(sample.t_ns);
     }
 
-    /// A reference pose (in non-decreasing time).
+    /// A reference pose.
     pub fn reference(&mut self, sample: StampedPose) {
-        self.pending.push_back(sample);
+        self.by_reference.query(sample);
+        self.by_estimate.candidate(sample);
+        self.advance(sample.t_ns);
+    }
+
+    fn advance(&mut self, t_ns: u64) {
+        self.now = self.now.max(t_ns);
+        self.by_reference.advance(self.now);
+        self.by_estimate.advance(self.now);
     }
 
     /// Pairs what is still pending and returns the totals; `None` if nothing was paired.
-    pub fn finish(mut self) -> Option<AccuracyTotals> {
-        while let Some(r) = self.pending.pop_front() {
-            self.pair(&r);
-        }
-        (self.matched > 0).then(|| {
-            let n = self.matched as f64;
+    pub fn finish(self) -> Option<AccuracyTotals> {
+        let (references, by_reference) = self.by_reference.finish();
+        let (estimates, by_estimate) = self.by_estimate.finish();
+        let s = if estimates > references {
+            by_reference
+        } else {
+            by_estimate
+        };
+        (s.matched > 0).then(|| {
+            let n = s.matched as f64;
             AccuracyTotals {
-                matched: self.matched,
-                position_rmse: (self.sum_sq_position / n).sqrt(),
-                position_max: self.max_position,
-                heading_rmse: (self.sum_sq_heading / n).sqrt(),
+                matched: s.matched,
+                position_rmse: (s.sum_sq_position / n).sqrt(),
+                position_max: s.max_position,
+                heading_rmse: (s.sum_sq_heading / n).sqrt(),
             }
         })
-    }
-
-    fn pair(&mut self, r: &StampedPose) {
-        let Some(e) = self
-            .estimates
-            .iter()
-            .filter(|e| e.t_ns.abs_diff(r.t_ns) <= MAX_DIFF_NS)
-            .min_by_key(|e| e.t_ns.abs_diff(r.t_ns))
-        else {
-            return;
-        };
-        let d = ((e.pose.x - r.pose.x).powi(2) + (e.pose.y - r.pose.y).powi(2)).sqrt();
-        self.matched += 1;
-        self.sum_sq_position += d * d;
-        self.max_position = self.max_position.max(d);
-        self.sum_sq_heading += angle_diff(e.pose.theta, r.pose.theta).powi(2);
     }
 }
 
@@ -134,5 +187,31 @@ mod tests {
         assert!((got.position_max - want.translation_m.max).abs() < 1e-12);
         assert!((got.heading_rmse.to_degrees() - want.heading_error_deg.rmse).abs() < 1e-9);
         assert!(OnlineAccuracy::default().finish().is_none());
+
+        // A reference denser than the estimate: evo pairs from the estimate.
+        let (mut est, mut reference) = (Trajectory::default(), Trajectory::default());
+        let mut online = OnlineAccuracy::default();
+        for k in 0..1000u64 {
+            let t = k * 10_000_000;
+            let r = StampedPose::new(t, Pose2::new(k as f64 * 0.01, 0.0, 0.0));
+            reference.samples.push(r);
+            online.reference(r);
+            if k % 5 == 2 {
+                let e = StampedPose::new(
+                    t + 4_000_000,
+                    Pose2::new(k as f64 * 0.01, 0.001 * (k % 7) as f64, 0.01),
+                );
+                est.samples.push(e);
+                online.estimate(e);
+            }
+        }
+        let got = online.finish().unwrap();
+        let want = ape(&reference, &est, &ApeOptions::default())
+            .unwrap()
+            .summary;
+        assert_eq!(got.matched, want.matched_poses);
+        assert_eq!(got.matched, 200);
+        assert!((got.position_rmse - want.translation_m.rmse).abs() < 1e-12);
+        assert!((got.heading_rmse.to_degrees() - want.heading_error_deg.rmse).abs() < 1e-9);
     }
 }
