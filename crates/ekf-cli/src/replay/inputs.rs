@@ -161,8 +161,9 @@ pub struct OdometryTracker {
 }
 
 impl OdometryTracker {
-    /// The motion from the previous odometry pose to this one.
-    pub fn motion(&mut self, stamp_ns: u64, pose: &Pose) -> Result<Motion<f64>, Skip> {
+    /// The motion from the previous odometry pose to this one, and the stamp of the
+    /// previous one (the start of the interval).
+    pub fn motion(&mut self, stamp_ns: u64, pose: &Pose) -> Result<(Motion<f64>, u64), Skip> {
         let pose = pose2(pose).ok_or(Skip::NonFinite { field: "pose" })?;
         let Some((t0, p0)) = self.previous else {
             self.previous = Some((stamp_ns, pose));
@@ -175,7 +176,9 @@ impl OdometryTracker {
             });
         }
         self.previous = Some((stamp_ns, pose));
-        Motion::from_odometry_poses(&p0, &pose).map_err(|_| Skip::NonFinite { field: "pose" })
+        let motion = Motion::from_odometry_poses(&p0, &pose)
+            .map_err(|_| Skip::NonFinite { field: "pose" })?;
+        Ok((motion, t0))
     }
 }
 

@@ -21,7 +21,7 @@ use crate::mcap_io::{BagMessage, BagReader, MessageError, ReadError, WriteError}
 use crate::ros2::geometry_msgs::TransformStamped;
 use crate::ros2::AnyMessage;
 use crate::trajectory::{StampedPose, Trajectory};
-use ekf_core::Pose2;
+use ekf_core::{Motion, Pose2, WheelSpeeds};
 use inputs::{
     heading_from_imu, heading_from_magnetic_field, mount_from_tf, pose2, OdometryTracker, Skip,
     WheelTracker,
@@ -372,6 +372,7 @@ pub fn replay(
         out: out.as_mut(),
         summary: &mut summary,
         poses: sink::PoseSink::new(options.tum.as_deref(), options.keep_trajectories)?,
+        clock: MotionClock::default(),
         wheels: WheelTracker::new(&config.motion.left_joint, &config.motion.right_joint),
         odometry: OdometryTracker::default(),
         timer: StageTimer {
@@ -506,6 +507,60 @@ pub(crate) fn reference_pose(message: &BagMessage) -> Option<Pose2<f64>> {
     }
 }
 
+/// Longest gap over which the state is brought forward at the last motion rate.
+const MAX_EXTRAPOLATION_NS: u64 = 200_000_000;
+
+/// One motion message's step over its whole interval.
+#[derive(Debug, Clone, Copy)]
+enum MotionStep {
+    /// Wheel speeds held over `dt`.
+    Wheels(WheelSpeeds<f64>),
+    /// An odometry pose delta.
+    Odometry(Motion<f64>),
+}
+
+impl MotionStep {
+    /// The part of the step after a fraction `1 − f` of its interval has passed.
+    fn part(self, f: f64) -> Self {
+        match self {
+            MotionStep::Wheels(s) => MotionStep::Wheels(WheelSpeeds { dt: s.dt * f, ..s }),
+            MotionStep::Odometry(m) => MotionStep::Odometry(Motion {
+                ds: m.ds * f,
+                dtheta: m.dtheta * f,
+            }),
+        }
+    }
+
+    /// The step per second, for a step over `dt` seconds.
+    fn rate(self, dt: f64) -> MotionRate {
+        match self {
+            MotionStep::Wheels(s) => MotionRate(MotionStep::Wheels(WheelSpeeds { dt: 1.0, ..s })),
+            MotionStep::Odometry(m) => MotionRate(MotionStep::Odometry(Motion {
+                ds: m.ds / dt,
+                dtheta: m.dtheta / dt,
+            })),
+        }
+    }
+}
+
+/// A motion step per second of time.
+#[derive(Debug, Clone, Copy)]
+struct MotionRate(MotionStep);
+
+impl MotionRate {
+    /// The step over `dt` seconds at this rate.
+    fn over(self, dt: f64) -> MotionStep {
+        self.0.part(dt)
+    }
+}
+
+/// The time the filter state refers to, and the rate of the last motion step.
+#[derive(Debug, Clone, Copy, Default)]
+struct MotionClock {
+    state_ns: Option<u64>,
+    rate: Option<MotionRate>,
+}
+
 /// The state of one replay loop.
 struct Run<'a> {
     config: &'a Config,
@@ -516,6 +571,7 @@ struct Run<'a> {
     out: Option<&'a mut OutputBag>,
     summary: &'a mut ReplaySummary,
     poses: sink::PoseSink,
+    clock: MotionClock,
     wheels: WheelTracker,
     odometry: OdometryTracker,
     timer: StageTimer,
@@ -582,25 +638,68 @@ impl Run<'_> {
                             right: self.config.motion.right_joint.clone(),
                             names,
                         })?;
-                speeds.map(|s| (now >= self.start_ns).then(|| self.localizer.predict_wheels(&s)))
+                speeds.map(|s| {
+                    (
+                        MotionStep::Wheels(s),
+                        stamp - (s.dt * 1e9).round() as u64,
+                        stamp,
+                    )
+                })
             }
             AnyMessage::Odometry(o) => {
                 let stamp = o.header.stamp.to_nanos().filter(|&s| s > 0).unwrap_or(now);
                 self.odometry
                     .motion(stamp, &o.pose.pose)
-                    .map(|m| (now >= self.start_ns).then(|| self.localizer.predict_odometry(&m)))
+                    .map(|(m, t0)| (MotionStep::Odometry(m), t0, stamp))
             }
             _ => return Ok(()),
         };
         match step {
             Err(skip) => self.skip(topic, now, skip),
-            Ok(None) => {}
-            Ok(Some(result)) => {
-                result?;
-                self.summary.motion_steps += 1;
-                self.record_pose(now)?;
+            Ok(_) if now < self.start_ns => {}
+            Ok((step, t0, t1)) => {
+                if self.apply_motion(step, t0, t1)? {
+                    self.summary.motion_steps += 1;
+                    self.record_pose(now)?;
+                }
             }
         }
+        Ok(())
+    }
+
+    /// Predicts over the motion interval `(t0, t1]`, or only its part after the time the
+    /// state already refers to (a scan or heading in between was fused at its own time,
+    /// after a prediction at the previous rate). Returns whether anything was predicted.
+    fn apply_motion(&mut self, step: MotionStep, t0: u64, t1: u64) -> Result<bool, ReplayError> {
+        let start = self.clock.state_ns.map_or(t0, |s| s.max(t0));
+        self.clock.state_ns = Some(self.clock.state_ns.map_or(t1, |s| s.max(t1)));
+        self.clock.rate = Some(step.rate((t1 - t0) as f64 * 1e-9));
+        if start >= t1 {
+            return Ok(false);
+        }
+        let fraction = (t1 - start) as f64 / (t1 - t0) as f64;
+        match step.part(fraction) {
+            MotionStep::Wheels(s) => self.localizer.predict_wheels(&s)?,
+            MotionStep::Odometry(m) => self.localizer.predict_odometry(&m)?,
+        }
+        Ok(true)
+    }
+
+    /// Brings the state to `t_ns` at the last motion rate before a scan or heading is
+    /// fused there, if the gap is short ([`MAX_EXTRAPOLATION_NS`]); longer gaps are left
+    /// to the next motion message (the robot may have stopped).
+    fn catch_up(&mut self, t_ns: u64) -> Result<(), ReplayError> {
+        let (Some(state), Some(rate)) = (self.clock.state_ns, self.clock.rate) else {
+            return Ok(());
+        };
+        if t_ns <= state || t_ns - state > MAX_EXTRAPOLATION_NS {
+            return Ok(());
+        }
+        match rate.over((t_ns - state) as f64 * 1e-9) {
+            MotionStep::Wheels(s) => self.localizer.predict_wheels(&s)?,
+            MotionStep::Odometry(m) => self.localizer.predict_odometry(&m)?,
+        }
+        self.clock.state_ns = Some(t_ns);
         Ok(())
     }
 
@@ -610,9 +709,9 @@ impl Run<'_> {
             return Ok(());
         }
         let cal = &self.config.compass_calibration;
-        let heading = match message.decode()? {
-            AnyMessage::Imu(imu) => heading_from_imu(&imu, cal),
-            AnyMessage::MagneticField(m) => heading_from_magnetic_field(&m, cal),
+        let (stamp, heading) = match message.decode()? {
+            AnyMessage::Imu(imu) => (imu.header.stamp, heading_from_imu(&imu, cal)),
+            AnyMessage::MagneticField(m) => (m.header.stamp, heading_from_magnetic_field(&m, cal)),
             _ => return Ok(()),
         };
         let h = match heading {
@@ -622,6 +721,7 @@ impl Run<'_> {
                 return Ok(());
             }
         };
+        self.catch_up(stamp.to_nanos().filter(|&t| t > 0).unwrap_or(now))?;
         let variance = h.variance.unwrap_or(self.config.localizer.compass.variance);
         let outcome = self
             .localizer
@@ -662,6 +762,13 @@ impl Run<'_> {
             let AnyMessage::LaserScan(scan) = message.decode()? else {
                 return Ok(());
             };
+            self.catch_up(
+                scan.header
+                    .stamp
+                    .to_nanos()
+                    .filter(|&t| t > 0)
+                    .unwrap_or(now),
+            )?;
             self.timer.last = Instant::now();
             let report = match self
                 .localizer

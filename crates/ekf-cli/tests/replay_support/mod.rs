@@ -341,8 +341,9 @@ pub fn motion_stamp(k: usize) -> u64 {
 }
 
 /// Stamp of the scan taken at motion period `k`: 500 ns after the motion stamp, so it has
-/// its own TUM row while the robot has not moved measurably (the replay does not
-/// predict to the scan's time).
+/// its own TUM row while the robot has not moved measurably (the scans are ray-cast from
+/// the pose at the motion stamp; the replay brings the state to the scan's stamp at the
+/// last motion rate, which over 500 ns is negligible).
 pub fn scan_stamp(k: usize) -> u64 {
     motion_stamp(k) + 500
 }
