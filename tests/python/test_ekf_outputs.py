@@ -5,7 +5,9 @@ shared/data (see conftest.py); their bags are decoded with `mcap` + `mcap-ros2-s
 independently, with `rosbags` (its own CDR decoder, fed by the ros2msg schemas in the file),
 and the values are compared with the source text logs and with each other.
 
-Run: pip install -r tests/python/requirements.txt && python -m pytest tests/python
+Run: scripts/test-all.sh, or cargo build -p ekf-cli --bins --examples &&
+pip install -r tests/python/requirements.txt && python -m pytest tests/python
+(EKF_BIN overrides target/debug/ekf).
 """
 
 import dataclasses
