@@ -24,3 +24,71 @@ cargo build -p ekf-core -p lrf-lines --no-default-features --target thumbv7em-no
 
 step "cargo doc"
 RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps
+
+# ---------------------------------------------------------------------------------------
+# Python checks: readers we did not write (mcap, mcap-ros2-support, rosbags) decode what
+# `ekf` writes. A venv at .venv is created on first use and reused; the pinned requirements
+# are reinstalled only when tests/python/requirements.txt (or the interpreter) changes.
+# PYTHON picks the interpreter (default python3). EKF_REQUIRE_DATA=1 turns the skip of the
+# real-log tests (when ../shared/data is absent) into a failure.
+py_started=$SECONDS
+PYTHON=${PYTHON:-python3}
+VENV=.venv
+REQUIREMENTS=tests/python/requirements.txt
+
+step "Python venv ($VENV) with $REQUIREMENTS"
+if ! command -v "$PYTHON" >/dev/null; then
+    echo "error: $PYTHON not found; install Python 3 (Debian: apt-get install python3 python3-venv)" >&2
+    exit 1
+fi
+if ! "$PYTHON" -c 'import venv, ensurepip' 2>/dev/null; then
+    echo "error: '$PYTHON -m venv' cannot work here: the ensurepip module is missing." >&2
+    echo "       On Debian/Ubuntu install the python3-venv package:" >&2
+    echo "       apt-get install python3-venv   (or python3.X-venv for your python3 version)" >&2
+    exit 1
+fi
+# Reuse the venv only if its interpreter still runs with pip (a Python upgrade breaks it).
+if [ -d "$VENV" ] && ! "$VENV/bin/python" -m pip --version >/dev/null 2>&1; then
+    echo "$VENV is broken (interpreter or pip missing); recreating it"
+    rm -rf "$VENV"
+fi
+if [ ! -d "$VENV" ]; then
+    if ! "$PYTHON" -m venv "$VENV"; then
+        rm -rf "$VENV"
+        echo "error: '$PYTHON -m venv $VENV' failed (Debian/Ubuntu: apt-get install python3-venv)" >&2
+        exit 1
+    fi
+fi
+stamp="$VENV/.requirements.stamp"
+want="$("$VENV/bin/python" -c 'import sys; print(sys.version)' | tr '\n' ' ') $(cksum <"$REQUIREMENTS")"
+if [ "$(cat "$stamp" 2>/dev/null)" != "$want" ]; then
+    rm -f "$stamp"
+    PIP_DISABLE_PIP_VERSION_CHECK=1 PIP_NO_INPUT=1 \
+        "$VENV/bin/python" -m pip install -q -r "$REQUIREMENTS"
+    printf '%s' "$want" >"$stamp"
+else
+    echo "requirements unchanged; reusing $VENV"
+fi
+py_venv_done=$SECONDS
+
+step "cargo build -p ekf-cli --bins --examples (the binary the Python checks run)"
+cargo build -p ekf-cli --bins --examples
+target_dir=$(cargo metadata --no-deps --format-version 1 |
+    "$VENV/bin/python" -c 'import json, sys; print(json.load(sys.stdin)["target_directory"])')
+export EKF_BIN="$target_dir/debug/ekf"
+py_build_done=$SECONDS
+
+step "pytest tests/python"
+pytest_status=0
+"$VENV/bin/python" -m pytest tests/python -q || pytest_status=$?
+if [ "$pytest_status" -eq 5 ]; then
+    echo "error: pytest collected no tests in tests/python; the Python checks are gone" >&2
+    exit 1
+elif [ "$pytest_status" -ne 0 ]; then
+    echo "error: pytest failed (exit status $pytest_status)" >&2
+    exit "$pytest_status"
+fi
+py_done=$SECONDS
+printf 'Python part: %ds (venv and requirements %ds, cargo build %ds, pytest %ds)\n' \
+    $((py_done - py_started)) $((py_venv_done - py_started)) \
+    $((py_build_done - py_venv_done)) $((py_done - py_build_done))
