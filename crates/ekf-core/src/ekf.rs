@@ -9,7 +9,7 @@
 use crate::kinematics::{DiffDrive, Motion, WheelSpeeds};
 use crate::measurement::Measurement;
 use crate::noise::{OdometryNoise, WheelNoise};
-use crate::validate::{all_finite, covariance, finite};
+use crate::validate::{all_finite, covariance, finite, non_negative, semi_definite};
 use crate::{ChiSquareGate, Error, Pose2, Real};
 use nalgebra::{Cholesky, Matrix3, SMatrix, SVector, Vector3};
 
@@ -86,7 +86,7 @@ impl<T: Real> Ekf<T> {
     ) -> Result<(), Error> {
         finite(motion.ds, "motion ds")?;
         finite(motion.dtheta, "motion dtheta")?;
-        all_finite(motion_covariance.as_slice(), "motion noise")?;
+        semi_definite(motion_covariance, "motion noise")?;
         let lin = motion.linearize(&self.pose());
         let p = lin.a * self.p * lin.a.transpose() + lin.g * motion_covariance * lin.g.transpose();
         self.x = lin.next.to_vector();
@@ -105,6 +105,8 @@ impl<T: Real> Ekf<T> {
         finite(speeds.left, "left wheel speed")?;
         finite(speeds.right, "right wheel speed")?;
         finite(speeds.dt, "dt")?;
+        non_negative(noise.delta, "wheel noise delta")?;
+        non_negative(noise.floor, "wheel noise floor")?;
         self.predict(
             &robot.motion(speeds),
             &noise.motion_covariance(robot, speeds),
@@ -120,6 +122,7 @@ impl<T: Real> Ekf<T> {
     ) -> Result<(), Error> {
         finite(motion.ds, "motion ds")?;
         finite(motion.dtheta, "motion dtheta")?;
+        noise.validated()?;
         self.predict(motion, &noise.motion_covariance(motion))
     }
 
@@ -181,9 +184,9 @@ impl<T: Real> Ekf<T> {
         })
     }
 
-    /// Fuses an innovation computed by [`Ekf::innovation`] at the current state, without
-    /// gating (the caller has gated it, e.g. during data association).
-    pub fn apply<const M: usize>(&mut self, inn: &Innovation<T, M>) -> Result<(), Error> {
+    /// Fuses an innovation computed at the current state (private: an innovation from an
+    /// earlier state would be fused silently wrong; [`Ekf::update`] recomputes it).
+    fn apply<const M: usize>(&mut self, inn: &Innovation<T, M>) -> Result<(), Error> {
         let k = self.p * inn.h.transpose() * inn.s_inv;
         let x = self.x + k * inn.y;
         let i_kh = Matrix3::identity() - k * inn.h;

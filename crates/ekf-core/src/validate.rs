@@ -48,6 +48,34 @@ pub(crate) fn positive<T: Real>(v: T, what: &'static str) -> Result<T, Error> {
     }
 }
 
+/// Checks that `m` is a valid process-noise covariance: finite, symmetric and positive
+/// *semi*-definite (a motion covariance may be singular, e.g. no lateral noise). Tested as
+/// positive definiteness of `m + ε·(1 + max|m_ij|)·I` with `ε = √machine-epsilon`, which
+/// passes any PSD matrix and fails one with an eigenvalue below `−ε·scale`.
+pub(crate) fn semi_definite<T: Real, const N: usize>(
+    m: &SMatrix<T, N, N>,
+    what: &'static str,
+) -> Result<(), Error> {
+    all_finite(m.as_slice(), what)?;
+    let scale = m.amax();
+    let tol = T::default_epsilon().sqrt() * (T::one() + scale);
+    for i in 0..N {
+        for j in (i + 1)..N {
+            if (m[(i, j)] - m[(j, i)]).abs() > tol * scale {
+                return Err(Error::NotSymmetric { what });
+            }
+        }
+        if m[(i, i)] < T::zero() {
+            return Err(Error::NegativeVariance { what });
+        }
+    }
+    let jittered = m + SMatrix::<T, N, N>::identity() * tol;
+    if Cholesky::new(jittered).is_none() {
+        return Err(Error::NotPositiveDefinite { what });
+    }
+    Ok(())
+}
+
 /// Checks that `m` is a valid covariance: finite, symmetric (to a relative tolerance
 /// of √ε of its largest entry) and positive definite (Cholesky succeeds).
 pub(crate) fn covariance<T: Real, const N: usize>(

@@ -24,8 +24,21 @@ fn step() -> impl Strategy<Value = Step> {
         (-30.0..30.0, -30.0..30.0, 0.01..0.2).prop_map(|(l, r, dt)| Step::Wheels(l, r, dt)),
         (-1.0..1.0, -1.0..1.0).prop_map(|(ds, dth)| Step::Odometry(ds, dth)),
         (-PI..PI, 1e-6..1.0).prop_map(|(h, v)| Step::Compass(h, v)),
-        (0.1..20.0, -PI..PI, 0.0..20.0, -PI..PI, 1e-6..0.1, -0.9..0.9)
-            .prop_map(|(r, psi, rho, beta, var, corr)| Step::Line(r, psi, rho, beta, var, corr)),
+        // A wall anywhere, seen near where the filter predicts it: offsets dr, dψ of at most
+        // half the line's own standard deviations, so yᵀR⁻¹y ≤ (0.25 + 0.25 + 2·0.9·0.25) /
+        // (1 − 0.9²) < 5, and since S ≥ R the NIS is below the 0.99 gate (9.21): every
+        // line update must be fused.
+        (
+            -0.5..0.5,
+            -0.5..0.5,
+            0.0..20.0,
+            -PI..PI,
+            1e-6..0.1,
+            -0.9..0.9
+        )
+            .prop_map(|(dr, dpsi, rho, beta, var, corr)| Step::Line(
+                dr, dpsi, rho, beta, var, corr
+            )),
         (-50.0..50.0, -50.0..50.0, 1e-4..10.0).prop_map(|(x, y, v)| Step::Position(x, y, v)),
     ]
 }
@@ -52,6 +65,7 @@ fn run<T: Real>(steps: &[Step]) -> Result<(), TestCaseError> {
         Matrix3::from_diagonal_element(c(0.1)),
     )
     .unwrap();
+    let (mut lines_fused, mut lines_tried) = (0usize, 0usize);
     for s in steps {
         let result = match *s {
             Step::Wheels(l, r, dt) => ekf.predict_wheels(
@@ -67,21 +81,29 @@ fn run<T: Real>(steps: &[Step]) -> Result<(), TestCaseError> {
                 .map(|o| {
                     assert!(o.nis >= T::zero());
                 }),
-            Step::Line(r, psi, rho, beta, var, corr) => {
+            Step::Line(dr, dpsi, rho, beta, var, corr) => {
                 let cov = Matrix2::new(
                     c(var),
                     c(corr * var * 0.1),
                     c(corr * var * 0.1),
                     c(var * 0.01),
                 );
-                let m = LaserLine::new(
-                    Line::new(c(r), c(psi)).unwrap(),
-                    cov,
-                    Line::new(c(rho), c(beta)).unwrap(),
-                    mount,
-                )
-                .unwrap();
-                ekf.update(&m, Some(&line_gate)).map(|_| ())
+                let wall = Line::new(c(rho), c(beta)).unwrap();
+                let predicted = wall.to_frame(&ekf.pose().compose(&mount));
+                if predicted.rho <= c(var.sqrt()) {
+                    // The wall passes within 1σ of the laser: r̂ = |C| is not smooth there.
+                    Ok(())
+                } else {
+                    lines_tried += 1;
+                    let seen = Line::new(
+                        predicted.rho + c(dr * var.sqrt()),
+                        predicted.beta + c(dpsi * (var * 0.01).sqrt()),
+                    )
+                    .unwrap();
+                    let m = LaserLine::new(seen, cov, wall, mount).unwrap();
+                    ekf.update(&m, Some(&line_gate))
+                        .map(|o| lines_fused += usize::from(o.accepted))
+                }
             }
             Step::Position(x, y, v) => ekf
                 .update(
@@ -100,6 +122,13 @@ fn run<T: Real>(steps: &[Step]) -> Result<(), TestCaseError> {
         prop_assert!(wrapped(ekf.pose().theta));
         prop_assert!(wrapped(ekf.state()[2]));
     }
+    // The run really exercises line updates, not only gate rejections.
+    prop_assert_eq!(lines_fused, lines_tried);
+    let line_steps = steps.iter().filter(|s| matches!(s, Step::Line(..))).count();
+    prop_assert!(
+        lines_tried * 10 >= line_steps * 9,
+        "{lines_tried} of {line_steps}"
+    );
     Ok(())
 }
 
@@ -190,6 +219,51 @@ fn refused_inputs_leave_the_state_unchanged() {
             .is_err(),
         "gate dof must match"
     );
+    assert_eq!(ekf, before);
+    // Negative or indefinite process noise (DESIGN: refused, state unchanged).
+    let negative = Matrix3::from_diagonal(&nalgebra::Vector3::new(-1.0, 0.0, 0.0));
+    assert_eq!(
+        ekf.predict(&Motion::new(0.1, 0.0).unwrap(), &negative),
+        Err(Error::NegativeVariance {
+            what: "motion noise"
+        })
+    );
+    let indefinite = Matrix3::new(1.0, 2.0, 0.0, 2.0, 1.0, 0.0, 0.0, 0.0, 1.0);
+    assert_eq!(
+        ekf.predict(&Motion::new(0.1, 0.0).unwrap(), &indefinite),
+        Err(Error::NotPositiveDefinite {
+            what: "motion noise"
+        })
+    );
+    let singular = Matrix3::from_diagonal(&nalgebra::Vector3::new(1e-4, 0.0, 1e-6));
+    let mut moved = ekf;
+    assert!(
+        moved
+            .predict(&Motion::new(0.1, 0.0).unwrap(), &singular)
+            .is_ok(),
+        "a PSD, singular noise is valid"
+    );
+    let negative_delta = WheelNoise {
+        delta: -10.0,
+        floor: 0.0,
+    };
+    assert_eq!(
+        ekf.predict_wheels(
+            &robot,
+            &WheelSpeeds::new(1.0, 1.0, 0.1).unwrap(),
+            &negative_delta
+        ),
+        Err(Error::NegativeVariance {
+            what: "wheel noise delta"
+        })
+    );
+    let negative_odometry = OdometryNoise {
+        a1: -0.1,
+        ..OdometryNoise::default()
+    };
+    assert!(ekf
+        .predict_odometry(&Motion::new(0.1, 0.0).unwrap(), &negative_odometry)
+        .is_err());
     assert_eq!(ekf, before);
     // Invalid initial covariances.
     let not_pd = Matrix3::from_diagonal(&nalgebra::Vector3::new(1.0, -1.0, 1.0));

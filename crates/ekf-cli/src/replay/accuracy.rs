@@ -40,6 +40,21 @@ impl Pairing {
         self.candidates.push_back(sample);
     }
 
+    /// Replaces the newest candidate (it had the same stamp).
+    fn replace_candidate(&mut self, sample: StampedPose) {
+        if let Some(last) = self.candidates.back_mut() {
+            *last = sample;
+        }
+    }
+
+    /// Replaces the newest query if it is still pending (it had the same stamp).
+    fn replace_query(&mut self, sample: StampedPose) {
+        match self.pending.back_mut() {
+            Some(last) if last.t_ns == sample.t_ns => *last = sample,
+            _ => self.query(sample),
+        }
+    }
+
     /// Everything later than `now` is in the future: a pending query older than
     /// `now − MAX_DIFF` has seen all its candidates; older candidates can go.
     fn advance(&mut self, now: u64) {
@@ -94,6 +109,7 @@ pub struct OnlineAccuracy {
     by_reference: Pairing,
     by_estimate: Pairing,
     now: u64,
+    last_estimate_ns: Option<u64>,
 }
 
 /// The result: matched pairs, position RMSE and maximum (m), heading RMSE (rad).
@@ -110,10 +126,18 @@ pub struct AccuracyTotals {
 }
 
 impl OnlineAccuracy {
-    /// An estimated pose (estimates and references together in non-decreasing time).
+    /// An estimated pose (estimates and references together in non-decreasing time). A
+    /// later estimate with the same stamp replaces the earlier one (a motion step and a
+    /// scan update at one time count as one pose, the last).
     pub fn estimate(&mut self, sample: StampedPose) {
-        self.by_reference.candidate(sample);
-        self.by_estimate.query(sample);
+        if self.last_estimate_ns == Some(sample.t_ns) {
+            self.by_reference.replace_candidate(sample);
+            self.by_estimate.replace_query(sample);
+        } else {
+            self.by_reference.candidate(sample);
+            self.by_estimate.query(sample);
+        }
+        self.last_estimate_ns = Some(sample.t_ns);
         self.advance(sample.t_ns);
     }
 
@@ -186,6 +210,30 @@ mod tests {
         assert!((got.position_rmse - want.translation_m.rmse).abs() < 1e-12);
         assert!((got.position_max - want.translation_m.max).abs() < 1e-12);
         assert!((got.heading_rmse.to_degrees() - want.heading_error_deg.rmse).abs() < 1e-9);
+
+        // Same-stamp estimates replace each other, and references arriving between them
+        // (denser than the estimates) still find their partner.
+        let mut online = OnlineAccuracy::default();
+        let mut reference = Trajectory::default();
+        let mut est = Trajectory::default();
+        for k in 0..400u64 {
+            let t = k * 10_000_000;
+            if k % 10 == 0 {
+                online.estimate(StampedPose::new(t, Pose2::new(5.0, 5.0, 0.0)));
+                let e = StampedPose::new(t, Pose2::new(k as f64 * 0.01 + 0.1, 0.0, 0.0));
+                online.estimate(e);
+                est.samples.push(e);
+            }
+            let r = StampedPose::new(t + 1_000_000, Pose2::new(k as f64 * 0.01, 0.0, 0.0));
+            online.reference(r);
+            reference.samples.push(r);
+        }
+        let got = online.finish().unwrap();
+        let want = ape(&reference, &est, &ApeOptions::default())
+            .unwrap()
+            .summary;
+        assert_eq!((got.matched, want.matched_poses), (40, 40));
+        assert!((got.position_rmse - want.translation_m.rmse).abs() < 1e-12);
         assert!(OnlineAccuracy::default().finish().is_none());
 
         // A reference denser than the estimate: evo pairs from the estimate.

@@ -59,6 +59,7 @@ impl PoseSink {
 
     /// An estimated pose.
     pub fn estimate(&mut self, sample: StampedPose) -> Result<(), ReplayError> {
+        self.accuracy.estimate(sample);
         match self.held.replace(sample) {
             Some(previous) if previous.t_ns != sample.t_ns => self.emit(previous),
             _ => Ok(()),
@@ -73,12 +74,11 @@ impl PoseSink {
         }
     }
 
-    /// The last estimate, since the last emitted one (for the output bag).
+    /// Writes an estimate whose stamp is final.
     fn emit(&mut self, sample: StampedPose) -> Result<(), ReplayError> {
         if let Some((path, file)) = &mut self.tum {
             write_tum_row(file, &sample).map_err(tum_error(path))?;
         }
-        self.accuracy.estimate(sample);
         if let Some((trajectory, _)) = &mut self.kept {
             trajectory.samples.push(sample);
         }
