@@ -129,3 +129,28 @@ fn aces_map_from_the_reference_and_from_the_first_scan() {
     .unwrap_err();
     assert!(err.to_string().contains("/ground_truth"), "{err}");
 }
+
+#[test]
+fn map_build_without_scans_names_the_missing_topic() {
+    use ekf_cli::commands::map::{build_map, MapSource};
+    let dir = tempfile::tempdir().unwrap();
+    let log = dir.path().join("odometry-only.mcap");
+    let mut w = ekf_cli::mcap_io::BagWriter::create(&log).unwrap();
+    w.write("/odom", &ekf_cli::ros2::nav_msgs::Odometry::default())
+        .unwrap();
+    w.finish().unwrap();
+    let err = build_map(
+        &log,
+        &Config::default(),
+        MapSource::FirstScan {
+            init_from_truth: false,
+        },
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        err.contains("no topic /scan (laser scans)")
+            && err.contains("/odom (nav_msgs/msg/Odometry)"),
+        "{err}"
+    );
+}

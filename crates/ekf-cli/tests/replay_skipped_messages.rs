@@ -192,7 +192,9 @@ fn nan_fields_are_skipped_with_warnings_and_never_reach_the_estimate() {
     let out = dir.path().join("nan.out.mcap");
     let tum = dir.path().join("nan.tum");
     let s = replay_json(&log, &["--out", p(&out), "--tum", p(&tum)]);
-    assert_eq!(s["warning_count"], 4, "{:#}", s["warnings"]);
+    // The NaN velocity at step 10 sits beside finite positions, which are what the
+    // replay differentiates: it is not used and not a warning.
+    assert_eq!(s["warning_count"], 3, "{:#}", s["warnings"]);
     let reasons: Vec<(&str, u64, &str)> = s["warnings"]
         .as_array()
         .expect("warnings")
@@ -208,7 +210,6 @@ fn nan_fields_are_skipped_with_warnings_and_never_reach_the_estimate() {
     assert_eq!(
         reasons,
         [
-            ("/joint_states", motion_stamp(10), "velocity is not finite"),
             ("/joint_states", motion_stamp(20), "position is not finite"),
             ("/compass", compass_stamp(30), "orientation is not finite"),
             (
@@ -275,7 +276,8 @@ fn a_skipped_wheel_reading_loses_no_motion() {
         });
         let (_, tum_clean) = run(dir.path(), "clean", &clean, "odometry");
         let (s, tum_bad) = run(dir.path(), &format!("bad_{k}"), &bad, "odometry");
-        assert_eq!(s["warning_count"], 1);
+        // Positions are differentiated; a NaN velocity beside them is not even looked at.
+        assert_eq!(s["warning_count"], if velocity { 0 } else { 1 });
         let (a, b) = (last_pose(&tum_clean), last_pose(&tum_bad));
         let d = (a[0] - b[0]).hypot(a[1] - b[1]);
         assert!(

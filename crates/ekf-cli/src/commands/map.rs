@@ -59,6 +59,19 @@ pub fn build_map(
         log: log_name.clone(),
         topic: topics.ground_truth.clone(),
     };
+    if !bag.topics().iter().any(|t| t.topic == topics.scan) {
+        return Err(ReplayError::MissingTopic {
+            log: log_name.clone(),
+            topic: topics.scan.clone(),
+            role: "laser scans",
+            available: bag
+                .topics()
+                .iter()
+                .map(|t| format!("{} ({})", t.topic, t.type_name))
+                .collect::<Vec<_>>()
+                .join(", "),
+        });
+    }
     let needs_reference = matches!(
         source,
         MapSource::Reference(_)
@@ -140,6 +153,15 @@ pub fn build_map(
         }
     };
     summary.segments = map.len();
+    if map.is_empty() {
+        return Err(ReplayError::Map {
+            path: log_name,
+            message: format!(
+                "no lines were extracted from {} scans; nothing to map",
+                summary.scans_used
+            ),
+        });
+    }
     Ok((map, summary))
 }
 

@@ -58,8 +58,8 @@ impl std::fmt::Display for Skip {
     }
 }
 
-/// Wheel speeds from `sensor_msgs/JointState`: `velocity` when present, else the
-/// difference of `position` over the stamp difference.
+/// Wheel speeds from `sensor_msgs/JointState`: the difference of `position` over the stamp
+/// difference (the encoder increment), or `velocity` when the message has no positions.
 #[derive(Debug, Clone)]
 pub struct WheelTracker {
     left: String,
@@ -94,13 +94,6 @@ impl WheelTracker {
         if !(pl.is_finite() && pr.is_finite()) {
             return Ok(Err(Skip::NonFinite { field: "position" }));
         }
-        let velocity = (msg.velocity.get(l).copied(), msg.velocity.get(r).copied());
-        if let (Some(vl), Some(vr)) = velocity {
-            // Checked before the start moves: the next reading then covers this interval.
-            if !(vl.is_finite() && vr.is_finite()) {
-                return Ok(Err(Skip::NonFinite { field: "velocity" }));
-            }
-        }
         let previous = self.previous.replace((stamp_ns, pl, pr));
         let Some((t0, pl0, pr0)) = previous else {
             return Ok(Err(Skip::First));
@@ -112,14 +105,11 @@ impl WheelTracker {
                 stamp_ns,
             }));
         }
+        // The encoder increment over the interval is exact; a velocity in the same message
+        // is one sample at its end, so it is not used (paper eqs. 1–2 integrate ω over Δt).
         let dt = (stamp_ns - t0) as f64 * 1e-9;
-        Ok(match velocity {
-            (Some(vl), Some(vr)) => {
-                WheelSpeeds::new(vl, vr, dt).map_err(|_| Skip::NonFinite { field: "velocity" })
-            }
-            _ => WheelSpeeds::from_increments(pl - pl0, pr - pr0, dt)
-                .map_err(|_| Skip::NonFinite { field: "position" }),
-        })
+        Ok(WheelSpeeds::from_increments(pl - pl0, pr - pr0, dt)
+            .map_err(|_| Skip::NonFinite { field: "position" }))
     }
 
     /// A message with velocities but no positions: the interval is the stamp difference.
@@ -304,7 +294,7 @@ mod tests {
                 && (s.right - 4.0).abs() < 1e-12
                 && (s.dt - 0.1).abs() < 1e-15
         );
-        // Velocities win when present.
+        // Positions win over velocities: Δφ = (0.1, 0.1) over 0.1 s; (1.0, 1.5) is ignored.
         let s = w
             .speeds(
                 200_000_000,
@@ -312,7 +302,10 @@ mod tests {
             )
             .unwrap()
             .unwrap();
-        assert_eq!((s.left, s.right), (1.0, 1.5));
+        assert!(
+            (s.left - 1.0).abs() < 1e-12 && (s.right - 1.0).abs() < 1e-12,
+            "{s:?}"
+        );
         // Backwards and duplicate stamps are skipped and do not move the start.
         assert_eq!(
             w.speeds(150_000_000, &joints(&["l", "r"], vec![0.0, 0.0], vec![]))
@@ -330,6 +323,8 @@ mod tests {
                 stamp_ns: 200_000_000
             })
         );
+        // A NaN position is skipped without moving the start: the next reading covers
+        // the skipped interval (differentiated from 200 ms).
         assert_eq!(
             w.speeds(
                 300_000_000,
@@ -338,21 +333,38 @@ mod tests {
             .unwrap(),
             Err(Skip::NonFinite { field: "position" })
         );
-        // A NaN velocity is skipped without moving the start either: the next reading
-        // covers the skipped interval (positions differentiated from 200 ms).
-        assert_eq!(
-            w.speeds(
-                300_000_000,
-                &joints(&["l", "r"], vec![0.4, 0.6], vec![f64::NAN, 1.0])
-            )
-            .unwrap(),
-            Err(Skip::NonFinite { field: "velocity" })
-        );
+        // With positions present a NaN velocity does not matter.
         let s = w
-            .speeds(400_000_000, &joints(&["l", "r"], vec![0.5, 0.7], vec![]))
+            .speeds(
+                400_000_000,
+                &joints(&["l", "r"], vec![0.5, 0.7], vec![f64::NAN, 1.0]),
+            )
             .unwrap()
             .unwrap();
-        assert!((s.left - 1.0).abs() < 1e-12 && (s.dt - 0.2).abs() < 1e-15);
+        assert!(
+            (s.left - 1.0).abs() < 1e-12 && (s.dt - 0.2).abs() < 1e-15,
+            "{s:?}"
+        );
+        // Velocities only: the interval is the stamp difference; a NaN velocity is skipped.
+        let mut v = WheelTracker::new("l", "r");
+        assert_eq!(
+            v.speeds(0, &joints(&["l", "r"], vec![], vec![1.0, 2.0]))
+                .unwrap(),
+            Err(Skip::First)
+        );
+        let s = v
+            .speeds(50_000_000, &joints(&["l", "r"], vec![], vec![1.0, 2.0]))
+            .unwrap()
+            .unwrap();
+        assert_eq!((s.left, s.right), (1.0, 2.0));
+        assert!((s.dt - 0.05).abs() < 1e-15);
+        assert!(v
+            .speeds(
+                60_000_000,
+                &joints(&["l", "r"], vec![], vec![f64::NAN, 2.0])
+            )
+            .unwrap()
+            .is_err());
         assert_eq!(
             w.speeds(300_000_000, &joints(&["a", "b"], vec![0.0, 0.0], vec![])),
             Err(vec!["a".to_string(), "b".to_string()])

@@ -405,10 +405,10 @@ pub fn replay(
 
     // Finish every output, whatever happened above.
     let Run { poses, timer, .. } = run;
-    if let Some(out) = out {
-        out.finish()?;
-    }
+    // Finish both outputs, then report the first error.
+    let bag_finished = out.map_or(Ok(()), OutputBag::finish);
     let poses = poses.finish()?;
+    bag_finished?;
     summary.map_segments = localizer.map().len();
     let [ext, mat, upd] = &timer.stages;
     summary.timings = summary::Timings {
