@@ -6,6 +6,7 @@
 //! `1700000000.123456789` survives a round trip exactly (an `f64` holds only about 16
 //! significant digits).
 
+use crate::ros2::geometry_msgs::Quaternion;
 use crate::trajectory::{StampedPose, Trajectory};
 use ekf_core::Pose2;
 use std::fs::File;
@@ -202,7 +203,13 @@ fn parse_line(text: &str, label: &str, line: usize) -> Result<(u64, Pose2<f64>),
             line,
         });
     }
-    let yaw = (2.0 * (qw * qz + qx * qy)).atan2(qw * qw + qx * qx - qy * qy - qz * qz);
+    let yaw = Quaternion {
+        x: qx,
+        y: qy,
+        z: qz,
+        w: qw,
+    }
+    .yaw();
     Ok((t_ns, Pose2::new(x, y, yaw)))
 }
 

@@ -1,6 +1,7 @@
-//! Golden test of `ekf import`'s output bag: the CARMEN fixture (two scans with their
-//! resets) with a synthetic compass becomes exactly these messages, read back with our
-//! reader. Regenerate after an intended change with `UPDATE_GOLDEN=1`.
+//! Golden tests of the bags `ekf` writes, read back with our reader: `ekf import` of the
+//! CARMEN fixture (two scans with their resets, a synthetic compass), and the start of
+//! `ekf replay`'s output on the bundled MRPT log. Regenerate after an intended change
+//! with `UPDATE_GOLDEN=1`.
 
 use ekf_cli::commands::import::{import_log, LogFormat};
 use ekf_cli::import::{CarmenFlavour, CarmenOptions, SyntheticCompass};
@@ -9,7 +10,8 @@ use ekf_cli::ros2::AnyMessage;
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
-fn dump(path: &std::path::Path) -> String {
+/// The bag's topics with counts, then one line per message (at most `max_messages`).
+fn dump(path: &std::path::Path, max_messages: usize) -> String {
     let bag = BagReader::open(path).unwrap();
     let mut out = String::new();
     for t in bag.topics() {
@@ -20,7 +22,7 @@ fn dump(path: &std::path::Path) -> String {
         )
         .unwrap();
     }
-    for m in bag.messages().unwrap() {
+    for m in bag.messages().unwrap().take(max_messages) {
         let m = m.unwrap();
         let line = match m.decode().unwrap() {
             AnyMessage::Odometry(o) => {
@@ -64,11 +66,71 @@ fn dump(path: &std::path::Path) -> String {
                 i.orientation.yaw(),
                 i.orientation_covariance[8]
             ),
+            AnyMessage::PoseWithCovarianceStamped(p) => {
+                let (c, q) = (&p.pose.covariance, &p.pose.pose);
+                format!(
+                    "{} x={:.6} y={:.6} yaw={:.6} cov_xx={:.3e} cov_xy={:.3e} cov_yy={:.3e} cov_yawyaw={:.3e}",
+                    p.header.frame_id,
+                    q.position.x,
+                    q.position.y,
+                    q.orientation.yaw(),
+                    c[0],
+                    c[1],
+                    c[7],
+                    c[35]
+                )
+            }
+            AnyMessage::MarkerArray(a) => a
+                .markers
+                .iter()
+                .map(|k| {
+                    format!(
+                        "{}:{} type {} points {}",
+                        k.ns,
+                        k.id,
+                        k.r#type,
+                        k.points.len()
+                    )
+                })
+                .collect::<Vec<_>>()
+                .join(", "),
+            AnyMessage::DiagnosticArray(d) => d
+                .status
+                .iter()
+                .map(|s| {
+                    format!(
+                        "{} level {} '{}' {}",
+                        s.name,
+                        s.level,
+                        s.message,
+                        s.values
+                            .iter()
+                            .map(|kv| format!("{}={}", kv.key, kv.value))
+                            .collect::<Vec<_>>()
+                            .join(" ")
+                    )
+                })
+                .collect::<Vec<_>>()
+                .join("; "),
             other => format!("unexpected {}", other.type_name()),
         };
         writeln!(out, "{} {} {}", m.log_time, m.topic(), line).unwrap();
     }
     out
+}
+
+fn check_golden(got: &str, name: &str) {
+    let golden = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/golden")
+        .join(name);
+    if std::env::var_os("UPDATE_GOLDEN").is_some() {
+        std::fs::write(&golden, got).unwrap();
+    }
+    let want = std::fs::read_to_string(&golden).unwrap();
+    assert_eq!(
+        got, want,
+        "regenerate with UPDATE_GOLDEN=1 if the change is intended"
+    );
 }
 
 #[test]
@@ -94,15 +156,27 @@ fn carmen_fixture_to_bag() {
         ),
         (2, 2, 2)
     );
-    let got = dump(&bag);
-    let golden =
-        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/golden/import_carmen_fixture.txt");
-    if std::env::var_os("UPDATE_GOLDEN").is_some() {
-        std::fs::write(&golden, &got).unwrap();
-    }
-    let want = std::fs::read_to_string(&golden).unwrap();
-    assert_eq!(
-        got, want,
-        "regenerate with UPDATE_GOLDEN=1 if the change is intended"
+    check_golden(&dump(&bag, usize::MAX), "import_carmen_fixture.txt");
+}
+
+#[test]
+fn replay_output_bag_start() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("replay.mcap");
+    let log = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../testdata/mrpt-office.mcap");
+    let run = std::process::Command::new(env!("CARGO_BIN_EXE_ekf"))
+        .arg("replay")
+        .arg(&log)
+        .args(["--mode", "laser", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
     );
+    // The topics with their counts, then the first 40 messages: the map from the first
+    // scan, poses with covariances, line markers and diagnostics.
+    check_golden(&dump(&out, 40), "replay_mrpt_office_start.txt");
 }

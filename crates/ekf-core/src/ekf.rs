@@ -87,11 +87,17 @@ impl<T: Real> Ekf<T> {
         finite(motion.ds, "motion ds")?;
         finite(motion.dtheta, "motion dtheta")?;
         semi_definite(motion_covariance, "motion noise")?;
+        self.propagate(motion, motion_covariance);
+        Ok(())
+    }
+
+    /// Eqs. 5–6 for a motion and a motion covariance already checked (finite, and
+    /// positive semi-definite by construction from validated noise parameters).
+    fn propagate(&mut self, motion: &Motion<T>, motion_covariance: &Matrix3<T>) {
         let lin = motion.linearize(&self.pose());
         let p = lin.a * self.p * lin.a.transpose() + lin.g * motion_covariance * lin.g.transpose();
         self.x = lin.next.to_vector();
         self.p = symmetrize(&p);
-        Ok(())
     }
 
     /// Prediction from wheel speeds (eqs. 1–9): motion from the kinematics, noise
@@ -107,10 +113,14 @@ impl<T: Real> Ekf<T> {
         finite(speeds.dt, "dt")?;
         non_negative(noise.delta, "wheel noise delta")?;
         non_negative(noise.floor, "wheel noise floor")?;
-        self.predict(
-            &robot.motion(speeds),
-            &noise.motion_covariance(robot, speeds),
-        )
+        let motion = robot.motion(speeds);
+        finite(motion.ds, "motion ds")?;
+        finite(motion.dtheta, "motion dtheta")?;
+        // J Q Jᵀ with Q = diag(δω² + σ₀²) ≥ 0 is positive semi-definite by construction.
+        let sigma = noise.motion_covariance(robot, speeds);
+        all_finite(sigma.as_slice(), "motion noise")?;
+        self.propagate(&motion, &sigma);
+        Ok(())
     }
 
     /// Prediction from an odometry delta `(Δs, Δθ)` with the distance/rotation noise
@@ -123,7 +133,11 @@ impl<T: Real> Ekf<T> {
         finite(motion.ds, "motion ds")?;
         finite(motion.dtheta, "motion dtheta")?;
         noise.validated()?;
-        self.predict(motion, &noise.motion_covariance(motion))
+        // diag(σ_s², σ_e², σ_θ²) is positive semi-definite by construction.
+        let sigma = noise.motion_covariance(motion);
+        all_finite(sigma.as_slice(), "motion noise")?;
+        self.propagate(motion, &sigma);
+        Ok(())
     }
 
     /// The innovation of a measurement at the current estimate, without changing the

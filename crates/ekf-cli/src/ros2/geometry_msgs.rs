@@ -61,11 +61,17 @@ impl Quaternion {
         }
     }
 
-    /// The yaw (rad, counter-clockwise about z, in (−π, π]) of this orientation (ZYX order).
+    /// The yaw (rad, counter-clockwise about z, in (−π, π]) of this orientation (ZYX
+    /// order), `atan2(2(wz + xy), w² + x² − y² − z²)`: right for quaternions that are not
+    /// exactly unit length too. NaN for a quaternion of (near) zero norm, which is no
+    /// orientation at all (callers refuse non-finite yaws).
     pub fn yaw(&self) -> f64 {
-        let siny = 2.0 * (self.w * self.z + self.x * self.y);
-        let cosy = 1.0 - 2.0 * (self.y * self.y + self.z * self.z);
-        siny.atan2(cosy)
+        let (w, x, y, z) = (self.w, self.x, self.y, self.z);
+        let norm2 = w * w + x * x + y * y + z * z;
+        if !norm2.is_finite() || norm2 <= 1e-12 {
+            return f64::NAN;
+        }
+        (2.0 * (w * z + x * y)).atan2(w * w + x * x - y * y - z * z)
     }
 }
 
