@@ -9,9 +9,9 @@
 use crate::kinematics::{DiffDrive, Motion, WheelSpeeds};
 use crate::measurement::Measurement;
 use crate::noise::{OdometryNoise, WheelNoise};
-use crate::validate::{all_finite, covariance, finite, non_negative, semi_definite};
+use crate::validate::{all_finite, covariance, finite, non_negative, semi_definite, spd_inverse};
 use crate::{ChiSquareGate, Error, Pose2, Real};
-use nalgebra::{Cholesky, Matrix3, SMatrix, SVector, Vector3};
+use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 
 /// The filter state: pose estimate `x = [x, y, θ]` and its covariance `P`.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -154,11 +154,9 @@ impl<T: Real> Ekf<T> {
         let y = m.residual(&z, &z_hat);
         all_finite(y.as_slice(), "innovation")?;
         let s = symmetrize(&(h * self.p * h.transpose() + r));
-        let s_inv = Cholesky::new(s)
-            .ok_or(Error::NotPositiveDefinite {
-                what: "innovation covariance",
-            })?
-            .inverse();
+        let s_inv = spd_inverse(&s).ok_or(Error::NotPositiveDefinite {
+            what: "innovation covariance",
+        })?;
         let nis = (y.transpose() * s_inv * y)[(0, 0)];
         Ok(Innovation {
             y,

@@ -76,6 +76,52 @@ pub(crate) fn semi_definite<T: Real, const N: usize>(
     Ok(())
 }
 
+/// Whether the symmetric matrix `m` is positive definite: by Sylvester's criterion (all
+/// leading principal minors > 0) for N ≤ 3, which is exact and much cheaper than a
+/// factorisation at these sizes; by Cholesky above.
+pub(crate) fn positive_definite<T: Real, const N: usize>(m: &SMatrix<T, N, N>) -> bool {
+    let z = T::zero();
+    match N {
+        1 => m[(0, 0)] > z,
+        2 => m[(0, 0)] > z && m[(0, 0)] * m[(1, 1)] - m[(0, 1)] * m[(1, 0)] > z,
+        3 => {
+            let minor2 = m[(0, 0)] * m[(1, 1)] - m[(0, 1)] * m[(1, 0)];
+            m[(0, 0)] > z && minor2 > z && det3(m) > z
+        }
+        _ => Cholesky::new(*m).is_some(),
+    }
+}
+
+/// The determinant of the top-left 3×3 block (N ≥ 3).
+fn det3<T: Real, const N: usize>(m: &SMatrix<T, N, N>) -> T {
+    m[(0, 0)] * (m[(1, 1)] * m[(2, 2)] - m[(1, 2)] * m[(2, 1)])
+        - m[(0, 1)] * (m[(1, 0)] * m[(2, 2)] - m[(1, 2)] * m[(2, 0)])
+        + m[(0, 2)] * (m[(1, 0)] * m[(2, 1)] - m[(1, 1)] * m[(2, 0)])
+}
+
+/// The inverse of a symmetric positive definite `m`, or `None` if it is not positive
+/// definite: closed forms for N ≤ 2 (the compass and line innovations), Cholesky above.
+pub(crate) fn spd_inverse<T: Real, const N: usize>(
+    m: &SMatrix<T, N, N>,
+) -> Option<SMatrix<T, N, N>> {
+    if !positive_definite(m) {
+        return None;
+    }
+    match N {
+        1 => Some(SMatrix::<T, N, N>::from_element(T::one() / m[(0, 0)])),
+        2 => {
+            let det = m[(0, 0)] * m[(1, 1)] - m[(0, 1)] * m[(1, 0)];
+            let mut inv = SMatrix::<T, N, N>::zeros();
+            inv[(0, 0)] = m[(1, 1)] / det;
+            inv[(1, 1)] = m[(0, 0)] / det;
+            inv[(0, 1)] = -m[(0, 1)] / det;
+            inv[(1, 0)] = -m[(1, 0)] / det;
+            Some(inv)
+        }
+        _ => Cholesky::new(*m).map(|c| c.inverse()),
+    }
+}
+
 /// Checks that `m` is a valid covariance: finite, symmetric (to a relative tolerance
 /// of √ε of its largest entry) and positive definite (Cholesky succeeds).
 pub(crate) fn covariance<T: Real, const N: usize>(
@@ -92,7 +138,7 @@ pub(crate) fn covariance<T: Real, const N: usize>(
             }
         }
     }
-    if Cholesky::new(*m).is_none() {
+    if !positive_definite(m) {
         return Err(Error::NotPositiveDefinite { what });
     }
     Ok(())
