@@ -240,22 +240,12 @@ impl Matcher {
     /// or non-finite overlap parameter.
     pub fn new(params: MatchParams) -> Result<Self, Error> {
         let gate = ChiSquareGate::from_probability(params.gate_probability, 2)?;
-        for (v, what) in [
+        non_negative_params(&[
             (params.min_overlap, "matching min_overlap"),
             (params.min_overlap_fraction, "matching min_overlap_fraction"),
             (params.map_sigma_r, "matching map_sigma_r"),
             (params.map_sigma_psi, "matching map_sigma_psi"),
-        ] {
-            if !v.is_finite() {
-                return Err(Error::NonFinite { what });
-            }
-            if v < 0.0 {
-                return Err(Error::OutOfRange {
-                    what,
-                    expected: ">= 0",
-                });
-            }
-        }
+        ])?;
         Ok(Self { params, gate })
     }
 
@@ -490,6 +480,23 @@ fn overlap(
         .min_overlap
         .min(params.min_overlap_fraction * (hi - lo));
     (overlap >= required).then_some(overlap)
+}
+
+/// Fails unless every `(value, name)` is finite and ≥ 0 (parameters of the matcher and
+/// the map builder).
+pub(crate) fn non_negative_params(params: &[(f64, &'static str)]) -> Result<(), Error> {
+    for &(v, what) in params {
+        if !v.is_finite() {
+            return Err(Error::NonFinite { what });
+        }
+        if v < 0.0 {
+            return Err(Error::OutOfRange {
+                what,
+                expected: ">= 0",
+            });
+        }
+    }
+    Ok(())
 }
 
 /// Fails unless the line, its end points and covariance are finite and the covariance is

@@ -219,12 +219,7 @@ pub fn compare(
     {
         let bag = BagReader::open(log)?;
         if !bag.topics().iter().any(|t| t.topic == reference_topic) {
-            let available = bag
-                .topics()
-                .iter()
-                .map(|t| format!("{} ({})", t.topic, t.type_name))
-                .collect::<Vec<_>>()
-                .join(", ");
+            let available = bag.describe_topics();
             return Err(CompareError::NoReference {
                 log: log_name,
                 topic: reference_topic,

@@ -64,12 +64,7 @@ pub fn load_trajectory(path: &Path, topic: Option<&str>) -> Result<Trajectory, E
         return Err(EvaluateError::NoPoseTopic {
             path: path.display().to_string(),
             wanted: wanted.join(" or "),
-            available: bag
-                .topics()
-                .iter()
-                .map(|t| format!("{} ({})", t.topic, t.type_name))
-                .collect::<Vec<_>>()
-                .join(", "),
+            available: bag.describe_topics(),
         });
     };
     let mut trajectory = Trajectory::default();

@@ -64,12 +64,7 @@ pub fn build_map(
             log: log_name.clone(),
             topic: topics.scan.clone(),
             role: "laser scans",
-            available: bag
-                .topics()
-                .iter()
-                .map(|t| format!("{} ({})", t.topic, t.type_name))
-                .collect::<Vec<_>>()
-                .join(", "),
+            available: bag.describe_topics(),
         });
     }
     let needs_reference = matches!(

@@ -88,6 +88,19 @@ impl BagReader {
         &self.topics
     }
 
+    /// The topics for an error message: `"/odom (nav_msgs/msg/Odometry), /scan (…)"`, or
+    /// `"no topics"`.
+    pub fn describe_topics(&self) -> String {
+        if self.topics.is_empty() {
+            return "no topics".to_owned();
+        }
+        self.topics
+            .iter()
+            .map(|t| format!("{} ({})", t.topic, t.type_name))
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
+
     /// The order [`Self::messages`] delivers messages in.
     pub fn order(&self) -> MessageOrder {
         if self.summary.is_some() {

@@ -237,18 +237,7 @@ pub fn replay(
             .find(|t| t.topic == topic)
             .map(|t| t.type_name.clone())
     };
-    let available = || {
-        let list = bag
-            .topics()
-            .iter()
-            .map(|t| format!("{} ({})", t.topic, t.type_name))
-            .collect::<Vec<_>>();
-        if list.is_empty() {
-            "no topics".to_owned()
-        } else {
-            list.join(", ")
-        }
-    };
+    let available = || bag.describe_topics();
     let missing = |topic: &str, role: &'static str| ReplayError::MissingTopic {
         log: log_name.clone(),
         topic: topic.into(),

@@ -2,7 +2,7 @@
 //! one segment.
 
 use super::{interval_along, point_on_line, LineMap, MapSegment};
-use crate::matching::validate_observed;
+use crate::matching::{non_negative_params, validate_observed};
 use crate::ObservedLine;
 use alloc::vec::Vec;
 use ekf_core::{angle_diff, wrap_angle, ChiSquareGate, Error, Line, Pose2};
@@ -83,21 +83,11 @@ impl MapBuilder {
     /// non-finite tolerance or gap.
     pub fn new(params: MapBuilderParams) -> Result<Self, Error> {
         let gate = ChiSquareGate::from_probability(params.gate_probability, 2)?;
-        for (v, what) in [
+        non_negative_params(&[
             (params.tolerance_rho, "map builder tolerance_rho"),
             (params.tolerance_beta, "map builder tolerance_beta"),
             (params.max_gap, "map builder max_gap"),
-        ] {
-            if !v.is_finite() {
-                return Err(Error::NonFinite { what });
-            }
-            if v < 0.0 {
-                return Err(Error::OutOfRange {
-                    what,
-                    expected: ">= 0",
-                });
-            }
-        }
+        ])?;
         let tolerance = Matrix2::from_diagonal(&Vector2::new(
             params.tolerance_rho * params.tolerance_rho,
             params.tolerance_beta * params.tolerance_beta,
