@@ -75,7 +75,7 @@ pub fn build_map(
             }
     );
     let preamble = read_preamble(&bag, config, needs_reference)?;
-    let (mount, mount_source) = laser_mount(&preamble, config);
+    let (mount, mount_source) = laser_mount(&preamble, config)?;
     let mut extractor =
         LineExtractor::new(config.localizer.extraction).map_err(lrf_lines::LocalizerError::from)?;
     let mut summary = MapBuildSummary {

@@ -238,22 +238,52 @@ pub fn heading_from_magnetic_field(
     })
 }
 
+/// Largest tilt of a laser's scan plane from level that is still read as a planar scan
+/// (rad): 5°, where a wall 10 m away appears 0.4 % farther (1/cos 5° − 1).
+pub const MAX_MOUNT_TILT: f64 = 5.0 * core::f64::consts::PI / 180.0;
+
+/// A transform in the laser's chain that is not a rotation about z.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TiltedMount {
+    /// The transform's parent frame.
+    pub parent: String,
+    /// Its child frame.
+    pub child: String,
+    /// The angle between its z axis and the parent's (rad); π is upside down.
+    pub tilt: f64,
+}
+
 /// The pose of `frame` in `base` from static transforms (parent → child), following the
-/// chain of parents; `None` if `frame` is not connected to `base`.
+/// chain of parents; `None` if `frame` is not connected to `base`. A link whose z axis
+/// is more than [`MAX_MOUNT_TILT`] from its parent's — a tilted or upside-down (mirrored)
+/// scanner, whose scans are not the level, counter-clockwise scans the filter models — is
+/// an error naming it.
 pub fn mount_from_tf(
     transforms: &[TransformStamped],
     base: &str,
     frame: &str,
-) -> Option<Pose2<f64>> {
+) -> Option<Result<Pose2<f64>, TiltedMount>> {
     let mut pose = Pose2::identity();
     let mut current = frame;
     for _ in 0..=transforms.len() {
         if current == base {
-            return Some(pose);
+            return Some(Ok(pose));
         }
         let t = transforms.iter().find(|t| t.child_frame_id == current)?;
         let tr = &t.transform;
-        let parent_to_child = Pose2::new(tr.translation.x, tr.translation.y, tr.rotation.yaw());
+        let q = &tr.rotation;
+        // z component of the rotated z axis, for the normalised quaternion.
+        let norm2 = q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z;
+        let zz = 1.0 - 2.0 * (q.x * q.x + q.y * q.y) / norm2;
+        let tilt = zz.clamp(-1.0, 1.0).acos();
+        if tilt.is_nan() || tilt > MAX_MOUNT_TILT {
+            return Some(Err(TiltedMount {
+                parent: t.header.frame_id.clone(),
+                child: t.child_frame_id.clone(),
+                tilt,
+            }));
+        }
+        let parent_to_child = Pose2::new(tr.translation.x, tr.translation.y, q.yaw());
         pose = parent_to_child.compose(&pose);
         current = &t.header.frame_id;
     }
@@ -446,7 +476,7 @@ mod tests {
             tf("base_link", "mast", 0.2, FRAC_PI_2),
             tf("mast", "laser", 0.1, 0.0),
         ];
-        let m = mount_from_tf(&tfs, "base_link", "laser").unwrap();
+        let m = mount_from_tf(&tfs, "base_link", "laser").unwrap().unwrap();
         assert!(
             (m.x - 0.2).abs() < 1e-12
                 && (m.y - 0.1).abs() < 1e-12
@@ -455,7 +485,53 @@ mod tests {
         assert_eq!(mount_from_tf(&tfs, "base_link", "camera"), None);
         assert_eq!(
             mount_from_tf(&tfs, "base_link", "base_link"),
-            Some(Pose2::identity())
+            Some(Ok(Pose2::identity()))
         );
+        // An upside-down laser (roll π) is refused, naming the transform.
+        let flipped = TransformStamped {
+            transform: Transform {
+                translation: Vector3 {
+                    x: 0.2,
+                    y: 0.0,
+                    z: 0.3,
+                },
+                rotation: Quaternion {
+                    x: 1.0,
+                    y: 0.0,
+                    z: 0.0,
+                    w: 0.0,
+                },
+            },
+            ..tf("base_link", "laser", 0.0, 0.0)
+        };
+        let err = mount_from_tf(&[flipped], "base_link", "laser")
+            .unwrap()
+            .unwrap_err();
+        assert_eq!(
+            (err.parent.as_str(), err.child.as_str()),
+            ("base_link", "laser")
+        );
+        assert!((err.tilt - core::f64::consts::PI).abs() < 1e-9);
+        // A laser pitched down by 3° is still read as level.
+        let (sn, cs) = (1.5_f64.to_radians().sin(), 1.5_f64.to_radians().cos());
+        let pitched = TransformStamped {
+            transform: Transform {
+                translation: Vector3 {
+                    x: 0.2,
+                    y: 0.0,
+                    z: 0.3,
+                },
+                rotation: Quaternion {
+                    x: 0.0,
+                    y: sn,
+                    z: 0.0,
+                    w: cs,
+                },
+            },
+            ..tf("base_link", "laser", 0.0, 0.0)
+        };
+        assert!(mount_from_tf(&[pitched], "base_link", "laser")
+            .unwrap()
+            .is_ok());
     }
 }

@@ -152,6 +152,16 @@ pub enum ReplayError {
         /// What went wrong (the parser names the entry and field).
         message: String,
     },
+    /// The laser is not mounted level (tilted, or upside down so its scans are mirrored).
+    #[error("/tf_static: the transform {parent} -> {child} tilts the laser {tilt_deg:.1}° from level (more than 5°; 180° is upside down); ekf models a level, upright scanner: mount it so, or set laser.mount_from_tf_static = false and give localizer.laser_mount if the scans are in fact level")]
+    TiltedLaser {
+        /// The transform's parent frame.
+        parent: String,
+        /// Its child frame.
+        child: String,
+        /// The tilt (degrees).
+        tilt_deg: f64,
+    },
     /// The filter refused its configuration or failed.
     #[error("{0}")]
     Filter(#[from] LocalizerError),
@@ -313,7 +323,7 @@ pub fn replay(
 
     // Laser mount: tf_static, else the configuration.
     let mut localizer_config = config.localizer.clone();
-    let (mount, source) = laser_mount(&preamble, config);
+    let (mount, source) = laser_mount(&preamble, config)?;
     localizer_config.laser_mount = mount;
     summary.laser_mount_source = source.into();
     summary.laser_mount = [mount.x, mount.y, mount.theta];
@@ -425,7 +435,10 @@ pub fn replay(
 /// The laser's mounting pose: `base_frame` → the scan's frame from `/tf_static` when
 /// the log has that chain and the configuration allows it, else `localizer.laser_mount`.
 /// Returns the pose and where it came from (`tf_static` or `config`).
-pub(crate) fn laser_mount(preamble: &Preamble, config: &Config) -> (Pose2<f64>, &'static str) {
+pub(crate) fn laser_mount(
+    preamble: &Preamble,
+    config: &Config,
+) -> Result<(Pose2<f64>, &'static str), ReplayError> {
     let from_tf = config
         .laser
         .mount_from_tf_static
@@ -437,8 +450,13 @@ pub(crate) fn laser_mount(preamble: &Preamble, config: &Config) -> (Pose2<f64>, 
         })
         .flatten();
     match from_tf {
-        Some(mount) => (mount, "tf_static"),
-        None => (config.localizer.laser_mount, "config"),
+        Some(Ok(mount)) => Ok((mount, "tf_static")),
+        Some(Err(t)) => Err(ReplayError::TiltedLaser {
+            parent: t.parent,
+            child: t.child,
+            tilt_deg: t.tilt.to_degrees(),
+        }),
+        None => Ok((config.localizer.laser_mount, "config")),
     }
 }
 
