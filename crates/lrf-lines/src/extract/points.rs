@@ -91,12 +91,13 @@ pub(crate) fn collect(scan: &LaserScan<'_>, table: &BeamTable, max_gap: f64, out
     let mut run_start = 0;
     // The previous beam's point, if that beam was valid.
     let mut previous: Option<(f64, f64)> = None;
+    let valid = ValidRanges::of(scan);
     for (&r, &(c, s)) in scan.ranges.iter().zip(&table.cos_sin) {
-        if !scan.is_valid(r) {
+        let range = f64::from(r);
+        if !valid.contains(range) {
             previous = None;
             continue;
         }
-        let range = f64::from(r);
         let (x, y) = (range * c, range * s);
         let joins = previous.is_some_and(|(px, py)| {
             let (dx, dy) = (x - px, y - py);
@@ -124,10 +125,37 @@ pub(crate) fn collect(scan: &LaserScan<'_>, table: &BeamTable, max_gap: f64, out
             continue;
         };
         let (ox, oy) = run_points.first().map_or((0.0, 0.0), |o| (o.x, o.y));
-        for p in run_points {
+        sums.extend(run_points.iter().map(|p| {
             sum = sum.plus(p.x - ox, p.y - oy);
-            sums.push(sum);
+            sum
+        }));
+    }
+}
+
+/// [`LaserScan::is_valid`] as two comparisons on the `f64` value of a reading: it is
+/// valid exactly when `lower < ρ < upper`, the limits being the stricter of each limit
+/// and its `float32` rounding (a NaN or infinite reading fails one of the comparisons,
+/// and `upper` is finite because `range_max` is).
+#[derive(Debug, Clone, Copy)]
+struct ValidRanges {
+    lower: f64,
+    upper: f64,
+}
+
+impl ValidRanges {
+    /// The limits of a validated `scan`.
+    fn of(scan: &LaserScan<'_>) -> Self {
+        // `range > (limit as f32)` for an `f32` range is `f64::from(range) > f64::from(limit as f32)`.
+        Self {
+            lower: scan.range_min.max(f64::from(scan.range_min as f32)),
+            upper: scan.range_max.min(f64::from(scan.range_max as f32)),
         }
+    }
+
+    /// Whether the reading `range` (widened from `f32`) is valid.
+    #[inline]
+    fn contains(&self, range: f64) -> bool {
+        range > self.lower && range < self.upper
     }
 }
 
