@@ -84,9 +84,7 @@ pub(crate) fn collect(scan: &LaserScan<'_>, table: &BeamTable, max_gap: f64, out
     let ScanPoints { points, runs, sums } = out;
     points.clear();
     runs.clear();
-    sums.clear();
     points.reserve(scan.ranges.len());
-    sums.reserve(scan.ranges.len() + 1);
     let max_gap_sq = max_gap * max_gap;
     let mut run_start = 0;
     // The previous beam's point, if that beam was valid.
@@ -117,18 +115,28 @@ pub(crate) fn collect(scan: &LaserScan<'_>, table: &BeamTable, max_gap: f64, out
         previous = Some((x, y));
     }
     close_run(runs, run_start, points.len());
-    // A second, simple loop keeps the first one's registers free.
+    prefix_sums(points, runs, sums);
+}
+
+/// Fills `sums` with the prefix sums of the moments of `points`, each point relative to
+/// the first point of its run: `sums[i]` covers `points[..i]`. A loop of its own, over
+/// preallocated slots, keeps the running sum in registers.
+fn prefix_sums(points: &[ScanPoint], runs: &[Run], sums: &mut Vec<Moments>) {
+    sums.clear();
+    sums.resize(points.len() + 1, Moments::default());
     let mut sum = Moments::default();
-    sums.push(sum);
-    for run in runs.iter() {
-        let Some(run_points) = points.get(run.clone()) else {
+    for run in runs {
+        let (Some(run_points), Some(slots)) = (
+            points.get(run.clone()),
+            sums.get_mut(run.start + 1..run.end + 1),
+        ) else {
             continue;
         };
         let (ox, oy) = run_points.first().map_or((0.0, 0.0), |o| (o.x, o.y));
-        sums.extend(run_points.iter().map(|p| {
+        for (slot, p) in slots.iter_mut().zip(run_points) {
             sum = sum.plus(p.x - ox, p.y - oy);
-            sum
-        }));
+            *slot = sum;
+        }
     }
 }
 
