@@ -1,14 +1,13 @@
 //! The [`LineExtractor`]: parameters plus the scratch buffers the pipeline reuses from
 //! scan to scan.
 
-use super::fit::{fit_trimmed_from, PointNoise};
+use super::fit::{fit_trimmed, PointNoise};
 use super::merge::{merge_collinear, Candidate, MergeRule};
 use super::points::{collect, BeamTable, Run, ScanPoint, ScanPoints};
 use super::split::split_runs;
 use super::{ExtractionError, ExtractionParams};
 use crate::{LaserScan, ObservedLine};
 use alloc::vec::Vec;
-use core::ops::Range;
 use ekf_core::{chi_square_quantile, Line};
 use nalgebra::Point2;
 
@@ -109,16 +108,7 @@ impl LineExtractor {
     fn fit_segments(&mut self) {
         self.candidates.clear();
         let mut write = 0;
-        let mut runs = self.scan.runs.iter().peekable();
-        // The first point of the current segment's run, the origin of its prefix sums;
-        // read when the run is entered, before compaction can overwrite it.
-        let mut origin = (0.0, 0.0);
         for seg in &self.segments {
-            while let Some(run) = runs.next_if(|run| run.start <= seg.start) {
-                if let Some(o) = self.scan.points.get(run.start) {
-                    origin = (o.x, o.y);
-                }
-            }
             let (Some(first), Some(last)) = (
                 self.scan.points.get(seg.start),
                 seg.end.checked_sub(1).and_then(|i| self.scan.points.get(i)),
@@ -130,16 +120,12 @@ impl LineExtractor {
             {
                 continue;
             }
-            let Some((kept, fit)) = self.scan.points.get(seg.clone()).and_then(|p| {
-                // The start of each fit from the prefix sums, still valid for this
-                // segment's points (compaction has only written before them).
-                let start = |r: Range<usize>| {
-                    self.scan
-                        .moments(seg.start + r.start..seg.start + r.end)?
-                        .line(origin)
-                };
-                fit_trimmed_from(p, &self.merge_rule.noise, self.params.min_points, start)
-            }) else {
+            let Some((kept, fit)) = self
+                .scan
+                .points
+                .get(seg.clone())
+                .and_then(|p| fit_trimmed(p, &self.merge_rule.noise, self.params.min_points))
+            else {
                 continue;
             };
             let support = write..write + kept.len();

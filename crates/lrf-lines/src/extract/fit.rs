@@ -55,17 +55,7 @@ pub(crate) struct LineFit {
 /// coupling. `None` when the points do not determine a line (fewer than two distinct
 /// points, or non-finite sums).
 pub(crate) fn fit_line(points: &[ScanPoint], noise: &PointNoise) -> Option<LineFit> {
-    fit_line_from(points, noise, total_least_squares(points)?)
-}
-
-/// [`fit_line`] started from `start`, the total-least-squares line `(r, ψ)` of `points`
-/// when the caller already has it (e.g. from prefix sums), saving a pass over the points.
-pub(crate) fn fit_line_from(
-    points: &[ScanPoint],
-    noise: &PointNoise,
-    start: (f64, f64),
-) -> Option<LineFit> {
-    let (mut r, mut psi) = start;
+    let (mut r, mut psi) = total_least_squares(points)?;
     let mut covariance = Matrix2::zeros();
     for _ in 0..MAX_ITERATIONS {
         let (j, b) = fisher_information(points, noise, r, psi);
@@ -98,29 +88,15 @@ pub(crate) fn fit_line_from(
 /// end of a segment (the split point, the farthest from the chord, is only near the
 /// corner when the noise allows). Returns the kept sub-range of `points` and its fit, or
 /// `None` if fewer than `min_points` remain.
-#[cfg(test)]
 pub(crate) fn fit_trimmed(
     points: &[ScanPoint],
     noise: &PointNoise,
     min_points: usize,
 ) -> Option<(Range<usize>, LineFit)> {
-    fit_trimmed_from(points, noise, min_points, |range| {
-        total_least_squares(points.get(range)?)
-    })
-}
-
-/// [`fit_trimmed`] with the total-least-squares line of a sub-range of `points` given by
-/// `start` (e.g. from prefix sums in O(1)) instead of a pass over the points.
-pub(crate) fn fit_trimmed_from(
-    points: &[ScanPoint],
-    noise: &PointNoise,
-    min_points: usize,
-    start: impl Fn(Range<usize>) -> Option<(f64, f64)>,
-) -> Option<(Range<usize>, LineFit)> {
     let mut range = 0..points.len();
     for _ in 0..MAX_TRIM_ROUNDS {
         let kept = points.get(range.clone())?;
-        let fit = fit_line_from(kept, noise, start(range.clone())?)?;
+        let fit = fit_line(kept, noise)?;
         let normal = libm::sincos(fit.psi);
         let residual = |p: &ScanPoint| normalized_residual(p, &fit, normal, noise);
         let (first, last) = (kept.first()?, kept.last()?);
@@ -145,7 +121,7 @@ pub(crate) fn fit_trimmed_from(
             return None;
         }
     }
-    let fit = fit_line_from(points.get(range.clone())?, noise, start(range.clone())?)?;
+    let fit = fit_line(points.get(range.clone())?, noise)?;
     Some((range, fit))
 }
 
