@@ -136,7 +136,7 @@ fn normalized_residual(
     let cos_d = p.cos * c_psi + p.sin * s_psi;
     let g2 = p.range * (p.sin * c_psi - p.cos * s_psi);
     let var = noise.range_var * cos_d * cos_d + noise.bearing_var * g2 * g2;
-    libm::fabs(p.range * cos_d - fit.r) / libm::sqrt(var.max(VARIANCE_FLOOR * noise.range_var))
+    libm::fabs(p.range * cos_d - fit.r) / libm::sqrt(floored(var, VARIANCE_FLOOR * noise.range_var))
 }
 
 /// The unweighted total-least-squares line of `points` (see [`Moments::line`]), with
@@ -168,7 +168,7 @@ fn fisher_information(
         let d = p.range * cos_d - r;
         let g2 = p.range * sin_d;
         let var = noise.range_var * cos_d * cos_d + noise.bearing_var * g2 * g2;
-        let w = 1.0 / var.max(floor);
+        let w = 1.0 / floored(var, floor);
         let wg2 = w * g2;
         j11 += w;
         j12 -= wg2;
@@ -180,6 +180,18 @@ fn fisher_information(
         Matrix2::new(j11, j12, j12, j22),
         nalgebra::Vector2::new(b1, b2),
     )
+}
+
+/// `var.max(floor)` (also `floor` for a NaN `var`), written as one comparison so it
+/// compiles to a single `maxsd` in the per-point loops: `f64::max` must also handle a
+/// NaN `floor`, which costs several instructions per point.
+#[inline(always)]
+fn floored(var: f64, floor: f64) -> f64 {
+    if var > floor {
+        var
+    } else {
+        floor
+    }
 }
 
 /// Inverse of a symmetric 2×2 matrix, exactly symmetric; `None` unless it is positive

@@ -84,19 +84,18 @@ pub(crate) fn collect(scan: &LaserScan<'_>, table: &BeamTable, max_gap: f64, out
     let ScanPoints { points, runs, sums } = out;
     points.clear();
     runs.clear();
-    sums.clear();
     points.reserve(scan.ranges.len());
-    sums.reserve(scan.ranges.len() + 1);
     let max_gap_sq = max_gap * max_gap;
     let mut run_start = 0;
     // The previous beam's point, if that beam was valid.
     let mut previous: Option<(f64, f64)> = None;
+    let valid = ValidRanges::of(scan);
     for (&r, &(c, s)) in scan.ranges.iter().zip(&table.cos_sin) {
-        if !scan.is_valid(r) {
+        let range = f64::from(r);
+        if !valid.contains(range) {
             previous = None;
             continue;
         }
-        let range = f64::from(r);
         let (x, y) = (range * c, range * s);
         let joins = previous.is_some_and(|(px, py)| {
             let (dx, dy) = (x - px, y - py);
@@ -116,18 +115,55 @@ pub(crate) fn collect(scan: &LaserScan<'_>, table: &BeamTable, max_gap: f64, out
         previous = Some((x, y));
     }
     close_run(runs, run_start, points.len());
-    // A second, simple loop keeps the first one's registers free.
+    prefix_sums(points, runs, sums);
+}
+
+/// Fills `sums` with the prefix sums of the moments of `points`, each point relative to
+/// the first point of its run: `sums[i]` covers `points[..i]`. A loop of its own, over
+/// preallocated slots, keeps the running sum in registers.
+fn prefix_sums(points: &[ScanPoint], runs: &[Run], sums: &mut Vec<Moments>) {
+    sums.clear();
+    sums.resize(points.len() + 1, Moments::default());
     let mut sum = Moments::default();
-    sums.push(sum);
-    for run in runs.iter() {
-        let Some(run_points) = points.get(run.clone()) else {
+    for run in runs {
+        let (Some(run_points), Some(slots)) = (
+            points.get(run.clone()),
+            sums.get_mut(run.start + 1..run.end + 1),
+        ) else {
             continue;
         };
         let (ox, oy) = run_points.first().map_or((0.0, 0.0), |o| (o.x, o.y));
-        for p in run_points {
+        for (slot, p) in slots.iter_mut().zip(run_points) {
             sum = sum.plus(p.x - ox, p.y - oy);
-            sums.push(sum);
+            *slot = sum;
         }
+    }
+}
+
+/// [`LaserScan::is_valid`] as two comparisons on the `f64` value of a reading: it is
+/// valid exactly when `lower < ρ < upper`, the limits being the stricter of each limit
+/// and its `float32` rounding (a NaN or infinite reading fails one of the comparisons,
+/// and `upper` is finite because `range_max` is).
+#[derive(Debug, Clone, Copy)]
+struct ValidRanges {
+    lower: f64,
+    upper: f64,
+}
+
+impl ValidRanges {
+    /// The limits of a validated `scan`.
+    fn of(scan: &LaserScan<'_>) -> Self {
+        // `range > (limit as f32)` for an `f32` range is `f64::from(range) > f64::from(limit as f32)`.
+        Self {
+            lower: scan.range_min.max(f64::from(scan.range_min as f32)),
+            upper: scan.range_max.min(f64::from(scan.range_max as f32)),
+        }
+    }
+
+    /// Whether the reading `range` (widened from `f32`) is valid.
+    #[inline]
+    fn contains(&self, range: f64) -> bool {
+        range > self.lower && range < self.upper
     }
 }
 
