@@ -2,6 +2,7 @@
 //! (see `compare_common`), their accuracy, the combined SVG, and the failure cases.
 
 mod compare_common;
+mod svg_support;
 
 use compare_common::{write_room_bag, BagContents};
 use ekf_cli::commands::compare::{
@@ -11,6 +12,7 @@ use ekf_cli::config::Config;
 use ekf_cli::replay::Mode;
 use std::path::Path;
 use std::sync::OnceLock;
+use svg_support::inspect_svg;
 
 /// The comparison of the full bag, computed once for the tests that share it.
 fn full() -> &'static Comparison {
@@ -117,30 +119,6 @@ fn json_has_one_entry_per_mode_with_status() {
     assert_eq!(v["reference_poses"], 601);
 }
 
-/// The `<text>` contents and the number of data lines of an SVG (which must parse): a
-/// data line is a `<polyline>` of more than two points (axes and ticks have two).
-fn inspect_svg(svg: &str) -> (Vec<String>, usize) {
-    let doc = roxmltree::Document::parse(svg).expect("the SVG is well-formed XML");
-    assert_eq!(doc.root_element().tag_name().name(), "svg");
-    let texts = doc
-        .descendants()
-        .filter(|n| n.has_tag_name("text"))
-        .filter_map(|n| n.text().map(|t| t.trim().to_owned()))
-        .collect();
-    let lines = doc
-        .descendants()
-        .filter(|n| n.has_tag_name("polyline"))
-        .filter(|n| {
-            n.attribute("points")
-                .unwrap_or("")
-                .split_whitespace()
-                .count()
-                > 2
-        })
-        .count();
-    (texts, lines)
-}
-
 #[test]
 fn one_svg_holds_fig_9_and_fig_10() {
     let c = full();
@@ -148,7 +126,7 @@ fn one_svg_holds_fig_9_and_fig_10() {
     let path = dir.path().join("compare.svg");
     write_svg(c, &path).unwrap();
     let svg = std::fs::read_to_string(&path).unwrap();
-    let (texts, polylines) = inspect_svg(&svg);
+    let (polylines, texts) = inspect_svg(svg.as_bytes());
     // Fig. 9: the reference and four estimates; position error, x and y error: four each.
     assert_eq!(polylines, 5 + 3 * 4, "{texts:?}");
     for name in ["reference", "odometry", "compass", "laser", "laser+compass"] {
@@ -242,7 +220,7 @@ fn a_mode_that_cannot_run_is_reported_and_the_others_still_run() {
     // The SVG has the modes that ran, and none of the others.
     let mut svg = Vec::new();
     render_svg(&c, &mut svg).unwrap();
-    let (texts, polylines) = inspect_svg(std::str::from_utf8(&svg).unwrap());
+    let (polylines, texts) = inspect_svg(&svg);
     assert_eq!(polylines, 3 + 3 * 2);
     assert!(!texts.iter().any(|t| t == "compass" || t == "laser+compass"));
 }

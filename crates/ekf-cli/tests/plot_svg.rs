@@ -1,11 +1,15 @@
 //! The SVG plots parse as XML, hold one polyline per series and name every series in
-//! the legend.
+//! the legend; several panels share one figure.
+
+mod svg_support;
 
 use ekf_cli::plot::{
-    plot_errors_over_time, plot_trajectories, PlotError, PlotOptions, TimeSeries, TrajectorySeries,
+    plot_errors_over_time, plot_figure, plot_trajectories, Panel, PlotError, PlotOptions,
+    TimeSeries, TrajectorySeries,
 };
-use ekf_cli::trajectory::Trajectory;
+use ekf_cli::trajectory::{StampedPose, Trajectory};
 use ekf_core::Pose2;
+use svg_support::inspect_svg;
 
 /// A circle of radius 5 m sampled at 10 Hz, shifted by `(dx, dy)`.
 fn circle(dx: f64, dy: f64) -> Trajectory {
@@ -18,31 +22,6 @@ fn circle(dx: f64, dy: f64) -> Trajectory {
         );
     }
     t
-}
-
-/// Parses the SVG and returns (number of data lines, all `<text>` contents). A data line
-/// is a `<polyline>` of more than two points (axes and ticks are two-point polylines).
-fn inspect(svg: &[u8]) -> (usize, Vec<String>) {
-    let text = std::str::from_utf8(svg).expect("SVG is UTF-8");
-    let doc = roxmltree::Document::parse(text).expect("SVG is well-formed XML");
-    assert_eq!(doc.root_element().tag_name().name(), "svg");
-    let polylines = doc
-        .descendants()
-        .filter(|n| n.has_tag_name("polyline"))
-        .filter(|n| {
-            n.attribute("points")
-                .unwrap_or("")
-                .split_whitespace()
-                .count()
-                > 2
-        })
-        .count();
-    let texts = doc
-        .descendants()
-        .filter(|n| n.has_tag_name("text"))
-        .filter_map(|n| n.text().map(|t| t.trim().to_owned()))
-        .collect();
-    (polylines, texts)
 }
 
 #[test]
@@ -71,7 +50,7 @@ fn trajectory_plot_has_a_line_and_a_legend_entry_per_trajectory() {
         },
     )
     .unwrap();
-    let (polylines, texts) = inspect(&svg);
+    let (polylines, texts) = inspect_svg(&svg);
     assert_eq!(polylines, 3);
     for name in [
         "reference",
@@ -106,7 +85,7 @@ fn error_plot_has_a_line_and_a_legend_entry_per_series() {
     ];
     let mut svg = Vec::new();
     plot_errors_over_time(&mut svg, &series, "error [m]", &PlotOptions::default()).unwrap();
-    let (polylines, texts) = inspect(&svg);
+    let (polylines, texts) = inspect_svg(&svg);
     assert_eq!(polylines, 2);
     for name in ["x error", "y error", "time [s]", "error [m]"] {
         assert!(
@@ -138,5 +117,98 @@ fn plots_of_nothing_or_too_small_are_errors() {
         trajectory: &truth,
     };
     let err = plot_trajectories(Vec::new(), Some(some), &[], &tiny);
+    assert!(matches!(err, Err(PlotError::TooSmall { .. })), "{err:?}");
+}
+
+/// A straight trajectory of `n` poses 10 cm and 100 ms apart, with the given slope.
+fn line(n: u64, slope: f64) -> Trajectory {
+    (0..n)
+        .map(|i| {
+            let x = i as f64 * 0.1;
+            StampedPose::new(i * 100_000_000, Pose2::new(x, slope * x, 0.0))
+        })
+        .collect()
+}
+
+#[test]
+fn panels_on_a_grid_in_one_svg() {
+    let (truth, est) = (line(20, 0.0), line(20, 0.1));
+    let errors: Vec<(u64, f64)> = (0..20).map(|i| (i * 100_000_000, i as f64)).collect();
+    let estimates = [TrajectorySeries {
+        name: "est",
+        trajectory: &est,
+    }];
+    let series = [TimeSeries {
+        name: "err",
+        points: &errors,
+    }];
+    let panels = [
+        Panel::Trajectories {
+            title: "paths",
+            reference: Some(TrajectorySeries {
+                name: "truth",
+                trajectory: &truth,
+            }),
+            estimates: &estimates,
+        },
+        Panel::ErrorsOverTime {
+            title: "",
+            series: &series,
+            y_desc: "e [m]",
+        },
+        Panel::ErrorsOverTime {
+            title: "third",
+            series: &series,
+            y_desc: "e [m]",
+        },
+    ];
+    let mut svg = Vec::new();
+    let options = PlotOptions {
+        title: "all".into(),
+        width: 1000,
+        height: 800,
+    };
+    plot_figure(&mut svg, &panels, 2, &options).unwrap();
+    let (lines, texts) = inspect_svg(&svg);
+    assert_eq!(lines, 4);
+    for t in ["all", "paths", "third", "truth", "est", "err", "e [m]"] {
+        assert!(texts.iter().any(|x| x == t), "{t}: {texts:?}");
+    }
+    assert_eq!(texts.iter().filter(|t| *t == "err").count(), 2);
+}
+
+#[test]
+fn empty_panels_and_small_cells_are_errors() {
+    let options = PlotOptions::default();
+    assert!(matches!(
+        plot_figure(Vec::new(), &[], 2, &options),
+        Err(PlotError::NoData)
+    ));
+    let empty = [TimeSeries {
+        name: "none",
+        points: &[],
+    }];
+    let panel = Panel::ErrorsOverTime {
+        title: "",
+        series: &empty,
+        y_desc: "",
+    };
+    assert!(matches!(
+        plot_figure(Vec::new(), &[panel], 1, &options),
+        Err(PlotError::NoData)
+    ));
+    let points = [(0, 1.0), (1, 2.0)];
+    let some = [TimeSeries {
+        name: "some",
+        points: &points,
+    }];
+    let panel = Panel::ErrorsOverTime {
+        title: "",
+        series: &some,
+        y_desc: "",
+    };
+    // 900 px across is enough for one chart, not for ten side by side.
+    plot_figure(Vec::new(), &[panel], 1, &options).unwrap();
+    let err = plot_figure(Vec::new(), &[panel; 10], 10, &options);
     assert!(matches!(err, Err(PlotError::TooSmall { .. })), "{err:?}");
 }

@@ -1,34 +1,14 @@
 //! A Localizer step (predict, compass, scan) does not allocate once its buffers have grown.
-// A counting global allocator needs `unsafe impl GlobalAlloc`; it only forwards to the
-// system allocator.
-#![allow(unsafe_code)]
 
+mod alloc_support;
 mod localizer_sim;
 mod matching_support;
 
+use alloc_support::allocations;
 use localizer_sim::{commands, mount, ranges, scan, start, walls};
 use lrf_lines::{Localizer, LocalizerConfig};
 use matching_support::{map_of, Rng};
 use nalgebra::Matrix3;
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicUsize, Ordering};
-
-struct Counting;
-
-static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) }
-    }
-}
-
-#[global_allocator]
-static GLOBAL: Counting = Counting;
 
 #[test]
 fn a_localizer_step_is_allocation_free_in_steady_state() {
@@ -46,12 +26,12 @@ fn a_localizer_step_is_allocation_free_in_steady_state() {
     for _ in 0..3 {
         localizer.update_scan(&scan).unwrap();
     }
-    let before = ALLOCATIONS.load(Ordering::Relaxed);
+    let before = allocations();
     for _ in 0..10 {
         localizer.predict_wheels(&cmd).unwrap();
         localizer.update_compass(0.0).unwrap();
         let report = localizer.update_scan(&scan).unwrap();
         assert!(report.fused > 0);
     }
-    assert_eq!(ALLOCATIONS.load(Ordering::Relaxed), before);
+    assert_eq!(allocations(), before);
 }

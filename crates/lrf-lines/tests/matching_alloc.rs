@@ -1,33 +1,13 @@
 //! Matching does not allocate once its reusable result has grown to size.
-// A counting global allocator needs `unsafe impl GlobalAlloc`; it only forwards to the
-// system allocator.
-#![allow(unsafe_code)]
 
+mod alloc_support;
 mod matching_support;
 
+use alloc_support::allocations;
 use ekf_core::{Ekf, Pose2};
 use lrf_lines::{MatchParams, MatchResult, Matcher};
 use matching_support::{map_of, observe_all, rect_room, NOISE};
 use nalgebra::Matrix3;
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicUsize, Ordering};
-
-struct Counting;
-
-static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) }
-    }
-}
-
-#[global_allocator]
-static GLOBAL: Counting = Counting;
 
 #[test]
 fn matching_is_allocation_free_in_steady_state() {
@@ -39,10 +19,10 @@ fn matching_is_allocation_free_in_steady_state() {
     let matcher = Matcher::new(MatchParams::default()).unwrap();
     let mut out = MatchResult::new();
     matcher.match_lines(&observed, &map, &ekf, &Pose2::identity(), &mut out);
-    let before = ALLOCATIONS.load(Ordering::Relaxed);
+    let before = allocations();
     for _ in 0..10 {
         matcher.match_lines(&observed, &map, &ekf, &Pose2::identity(), &mut out);
     }
-    assert_eq!(ALLOCATIONS.load(Ordering::Relaxed), before);
+    assert_eq!(allocations(), before);
     assert_eq!(out.matches().len(), 4);
 }
