@@ -10,5 +10,6 @@ pub mod mcap_io;
 pub mod plot;
 pub mod replay;
 pub mod ros2;
+pub mod sim;
 pub mod trajectory;
 pub mod tum;

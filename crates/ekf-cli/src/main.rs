@@ -4,7 +4,7 @@
 
 use clap::ValueEnum;
 use clap::{Parser, Subcommand};
-use ekf_cli::commands::{compare, evaluate, import, map};
+use ekf_cli::commands::{compare, evaluate, import, map, simulate};
 use ekf_cli::config::{Config, DEFAULT_TOML};
 use ekf_cli::import::{CarmenFlavour, CarmenOptions, SyntheticCompass};
 use ekf_cli::replay::{self, Mode, ReplayOptions};
@@ -71,8 +71,46 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
-    /// Print the documented default configuration (TOML).
-    Config,
+    /// Print the documented default configuration (TOML), or a preset's overrides.
+    Config {
+        /// A built-in preset instead of the defaults (paper-robot: the simulated robot).
+        #[arg(long)]
+        preset: Option<String>,
+    },
+    /// Simulate the paper's robot in a room and write a ROS 2 bag with exact ground truth
+    /// (/joint_states, /compass, /scan, /tf_static, /ground_truth).
+    Simulate {
+        /// A built-in scenario (paper, triangle, walls, l-room, corridor) or a line map
+        /// (.json) whose room the robot drives around 1 m inside.
+        scenario: String,
+        /// The bag to write.
+        #[arg(long)]
+        out: PathBuf,
+        /// Noise seed: the same seed gives the same bytes.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Simulated time (s); default: the scenario's (120 s).
+        #[arg(long)]
+        duration: Option<f64>,
+        /// What steers the robot along its path.
+        #[arg(long, value_enum, default_value_t = CliSteering::Truth)]
+        steer_by: CliSteering,
+        /// Laser angular resolution (degrees): 0.25, 0.5 or 1.
+        #[arg(long)]
+        resolution: Option<f64>,
+        /// Wheel slip events per minute (default: none).
+        #[arg(long)]
+        slips_per_minute: Option<f64>,
+        /// Compass bias (degrees; default 0).
+        #[arg(long, allow_hyphen_values = true)]
+        compass_bias: Option<f64>,
+        /// Probability of a compass outlier per reading (default 0.02).
+        #[arg(long)]
+        compass_outliers: Option<f64>,
+        /// Print the summary as JSON.
+        #[arg(long)]
+        json: bool,
+    },
     /// Line maps.
     Map {
         #[command(subcommand)]
@@ -173,6 +211,16 @@ enum MapAction {
         #[arg(long)]
         json: bool,
     },
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum CliSteering {
+    /// The true pose.
+    Truth,
+    /// The laser + compass EKF in the loop.
+    Ekf,
+    /// Dead reckoning.
+    Odometry,
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -287,7 +335,48 @@ fn print_import(
 
 fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
     match cli.command {
-        Command::Config => print!("{DEFAULT_TOML}"),
+        Command::Config { preset: None } => print!("{DEFAULT_TOML}"),
+        Command::Config { preset: Some(name) } => print!("{}", Config::preset_text(&name)?),
+        Command::Simulate {
+            scenario,
+            out,
+            seed,
+            duration,
+            steer_by,
+            resolution,
+            slips_per_minute,
+            compass_bias,
+            compass_outliers,
+            json,
+        } => {
+            let options = simulate::SimulateOptions {
+                seed,
+                duration_s: duration,
+                steering: match steer_by {
+                    CliSteering::Truth => simulate::Steering::Truth,
+                    CliSteering::Ekf => simulate::Steering::Ekf,
+                    CliSteering::Odometry => simulate::Steering::Odometry,
+                },
+                resolution_deg: resolution,
+                slips_per_minute,
+                compass_bias_deg: compass_bias,
+                compass_outliers,
+            };
+            let scenario = simulate::load_scenario(&scenario, &options)?;
+            create_parent(&out)?;
+            let summary = simulate::simulate_log(&scenario, &options, &out)?;
+            if json {
+                println!("{}", serde_json::to_string_pretty(&summary)?);
+            } else {
+                let s = &summary.stats;
+                println!(
+                    "{}: {} ({} s, seed {}): {} messages, {} scans, {:.1} m driven, {} compass outliers, {} slips, closest to a wall {:.2} m",
+                    summary.out, summary.scenario, summary.duration_s, summary.seed,
+                    summary.messages, s.scans, s.distance_m, s.compass_outliers, s.slips,
+                    s.min_clearance_m
+                );
+            }
+        }
         Command::Map {
             action:
                 MapAction::Build {

@@ -5,3 +5,4 @@ pub mod compare;
 pub mod evaluate;
 pub mod import;
 pub mod map;
+pub mod simulate;

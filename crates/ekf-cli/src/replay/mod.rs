@@ -65,11 +65,13 @@ impl Mode {
         }
     }
 
-    fn uses_compass(self) -> bool {
+    /// Whether the mode fuses the compass.
+    pub fn uses_compass(self) -> bool {
         matches!(self, Mode::Compass | Mode::LaserCompass)
     }
 
-    fn uses_laser(self) -> bool {
+    /// Whether the mode fuses laser lines.
+    pub fn uses_laser(self) -> bool {
         matches!(self, Mode::Laser | Mode::LaserCompass)
     }
 }
