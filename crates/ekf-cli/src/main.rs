@@ -4,7 +4,7 @@
 
 use clap::ValueEnum;
 use clap::{Parser, Subcommand};
-use ekf_cli::commands::{compare, evaluate, import, map, simulate};
+use ekf_cli::commands::{compare, evaluate, experiment, import, map, simulate};
 use ekf_cli::config::{Config, DEFAULT_TOML};
 use ekf_cli::import::{CarmenFlavour, CarmenOptions, SyntheticCompass};
 use ekf_cli::replay::{self, Mode, ReplayOptions};
@@ -70,6 +70,25 @@ enum Command {
         /// Print one JSON object instead of a table.
         #[arg(long)]
         json: bool,
+    },
+    /// The paper's experiments in simulation: an SVG figure and a JSON table each.
+    Experiment {
+        /// fig9 (Fig. 9/10 over seeds, with NEES), fig11 (path following with and
+        /// without the EKF), fig12 (driving round the first-scan map's walls).
+        #[arg(value_enum)]
+        figure: Figure,
+        /// Where the figure, the table and logs go.
+        #[arg(long, default_value = "out/experiments")]
+        out_dir: PathBuf,
+        /// The first seed.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Seeds to run (fig9; the figures show the first).
+        #[arg(long, default_value_t = 20)]
+        seeds: u32,
+        /// Simulated time per run (s); default: the scenario's (120 s).
+        #[arg(long)]
+        duration: Option<f64>,
     },
     /// Print the documented default configuration (TOML), or a preset's overrides.
     Config {
@@ -214,6 +233,13 @@ enum MapAction {
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
+enum Figure {
+    Fig9,
+    Fig11,
+    Fig12,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
 enum CliSteering {
     /// The true pose.
     Truth,
@@ -335,6 +361,26 @@ fn print_import(
 
 fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
     match cli.command {
+        Command::Experiment {
+            figure,
+            out_dir,
+            seed,
+            seeds,
+            duration,
+        } => {
+            let options = experiment::ExperimentOptions {
+                out_dir,
+                seed,
+                seeds,
+                duration_s: duration,
+            };
+            let json = match figure {
+                Figure::Fig9 => serde_json::to_string_pretty(&experiment::fig9::run(&options)?)?,
+                Figure::Fig11 => serde_json::to_string_pretty(&experiment::fig11::run(&options)?)?,
+                Figure::Fig12 => serde_json::to_string_pretty(&experiment::fig12::run(&options)?)?,
+            };
+            println!("{json}");
+        }
         Command::Config { preset: None } => print!("{DEFAULT_TOML}"),
         Command::Config { preset: Some(name) } => print!("{}", Config::preset_text(&name)?),
         Command::Simulate {

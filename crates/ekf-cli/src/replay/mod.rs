@@ -756,9 +756,10 @@ impl Run<'_> {
                     ("heading_rad", format!("{:.6}", h.heading)),
                 ],
             )?;
-            out.pose(now, &self.localizer.pose(), self.localizer.covariance())?;
         }
-        Ok(())
+        // The corrected pose, like after a motion step or a scan: at one stamp the TUM
+        // trajectory and the accuracy keep the last.
+        self.record_pose(now)
     }
 
     fn scan(&mut self, message: &BagMessage) -> Result<(), ReplayError> {

@@ -167,6 +167,12 @@ impl PurePursuit {
         }
     }
 
+    /// Starts following at the path point nearest to `pose`.
+    pub fn join(&mut self, path: &Path, pose: &ekf_core::Pose2<f64>) {
+        let p = Point2::new(pose.x, pose.y);
+        self.progress = path.progress_near(&p, 0.0, path.length() - SPACING);
+    }
+
     /// Arc length of the path covered so far (m).
     pub fn progress(&self) -> f64 {
         self.progress

@@ -148,10 +148,11 @@ pub fn simulate(
         SimRng::new(options.seed, Stream::Compass),
         SimRng::new(options.seed, Stream::Laser),
     );
-    let start = scenario.path.start_pose();
+    let start = scenario.start;
     let mut robot = Robot::new(scenario.robot, start);
     let d = scenario.drive;
     let mut follower = PurePursuit::new(d.lookahead, d.speed, d.max_turn_rate);
+    follower.join(&scenario.path, &start);
     let mut filter = match &options.estimator {
         Some(e) => Some(InLoop::new(e, start, scenario)?),
         None => None,

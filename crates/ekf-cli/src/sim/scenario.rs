@@ -4,6 +4,7 @@ use super::path::{Path, PathError};
 use super::robot::RobotModel;
 use super::room::Room;
 use super::sensors::{CompassModel, LaserModel};
+use ekf_core::Pose2;
 use lrf_lines::LineMap;
 use nalgebra::Point2;
 use serde::Serialize;
@@ -18,8 +19,11 @@ pub struct Scenario {
     pub name: String,
     /// The walls.
     pub room: Room,
-    /// The closed path the robot follows, from its start.
+    /// The closed path the robot follows.
     pub path: Path,
+    /// Where the robot starts (by default the path's start, facing along it); the
+    /// follower joins the path at its nearest point.
+    pub start: Pose2<f64>,
     /// The robot.
     pub robot: RobotModel,
     /// The compass.
@@ -89,6 +93,7 @@ impl Scenario {
         Self {
             name: name.into(),
             room,
+            start: path.start_pose(),
             path,
             robot: RobotModel::default(),
             compass: CompassModel::default(),
@@ -107,24 +112,28 @@ impl Scenario {
     /// - `l-room`: an L-shaped room with three pillars, a loop through both arms;
     /// - `corridor`: a 20 m × 2.2 m corridor, a long loop down and back.
     ///
+    /// Each starts on its path's first straight edge, heading along it.
     /// The three scenarios in the paper's room use the paper's compass (σ = 0.1°,
     /// [`CompassModel::paper`]); the others a CMPS03 as measured (σ = 2°).
     pub fn builtin(name: &str) -> Result<Self, ScenarioError> {
-        let (room, corners, radius) = match name {
+        let (room, corners, radius, start) = match name {
             "paper" => (
                 Room::paper(),
                 points(&[[1.0, 1.0], [5.0, 1.0], [5.0, 3.0], [1.0, 3.0]]),
                 0.5,
+                [2.0, 1.0],
             ),
             "triangle" => (
                 Room::paper(),
                 points(&[[1.0, 0.9], [5.0, 0.9], [3.0, 3.2]]),
                 0.4,
+                [2.0, 0.9],
             ),
             "walls" => (
                 Room::paper(),
                 points(&[[0.6, 0.6], [5.4, 0.6], [5.4, 3.4], [0.6, 3.4]]),
                 0.4,
+                [1.5, 0.6],
             ),
             "l-room" => (
                 Room::l_shaped(),
@@ -137,16 +146,21 @@ impl Scenario {
                     [1.2, 6.8],
                 ]),
                 0.5,
+                [2.5, 1.2],
             ),
             "corridor" => (
                 Room::corridor(),
                 points(&[[1.0, 0.6], [19.0, 0.6], [19.0, 1.6], [1.0, 1.6]]),
                 0.45,
+                [3.0, 0.6],
             ),
             _ => return Err(ScenarioError::Unknown { name: name.into() }),
         };
         let path = Path::rounded_polygon(&corners, radius)?;
         let mut scenario = Self::new(name, room, path);
+        // On the first straight edge, facing along it (east): the first scan, which
+        // becomes the map, looks into the room rather than into a corner.
+        scenario.start = Pose2::new(start[0], start[1], 0.0);
         if scenario.room == Room::paper() {
             scenario.compass = CompassModel::paper();
         }
