@@ -4,6 +4,7 @@
 
 pub mod commands;
 pub mod config;
+pub mod devices;
 pub mod eval;
 pub mod import;
 pub mod mcap_io;
