@@ -3,11 +3,13 @@
 //! Each protocol is a sans-I/O part (bytes in, values out) plus a small driver over a
 //! [`Link`]; the device side of each protocol, for the emulators, lives next to it.
 
+pub mod config;
 pub mod error;
 pub mod gps;
 pub mod link;
 pub mod modbus_base;
 pub mod sick;
 
+pub use config::DevicesConfig;
 pub use error::DeviceError;
 pub use link::{Link, SerialLink};
