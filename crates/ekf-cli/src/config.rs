@@ -72,6 +72,8 @@ pub struct Config {
     pub laser: LaserConfig,
     /// The filter: robot, noise models, laser mount, extraction, matching, compass.
     pub localizer: LocalizerConfig,
+    /// Serial devices for `ekf live`.
+    pub devices: crate::devices::DevicesConfig,
 }
 
 /// Topic names (DESIGN.md §5 defaults).

@@ -4,8 +4,11 @@
 
 pub mod commands;
 pub mod config;
+pub mod devices;
+pub mod emulate;
 pub mod eval;
 pub mod import;
+pub mod live;
 pub mod mcap_io;
 pub mod plot;
 pub mod replay;

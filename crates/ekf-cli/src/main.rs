@@ -7,6 +7,7 @@ use clap::{Parser, Subcommand};
 use ekf_cli::commands::{compare, evaluate, experiment, import, map, simulate};
 use ekf_cli::config::{Config, DEFAULT_TOML};
 use ekf_cli::import::{CarmenFlavour, CarmenOptions, SyntheticCompass};
+use ekf_cli::live;
 use ekf_cli::replay::{self, Mode, ReplayOptions};
 use std::io::IsTerminal;
 use std::path::PathBuf;
@@ -127,6 +128,34 @@ enum Command {
         #[arg(long)]
         compass_outliers: Option<f64>,
         /// Print the summary as JSON.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Run the filter on the robot's serial devices (SICK LMS 2xx, MODBUS base
+    /// controller, NMEA GPS), print poses, and record everything for `ekf replay`.
+    Live {
+        /// The laser's serial port.
+        #[arg(long)]
+        laser: String,
+        /// The base controller's serial port (RS-485, MODBUS RTU).
+        #[arg(long)]
+        base: String,
+        /// The GPS's serial port (NMEA).
+        #[arg(long)]
+        gps: Option<String>,
+        /// Configuration file (TOML); `ekf config` prints the defaults.
+        #[arg(long)]
+        config: Option<PathBuf>,
+        /// Line map (JSON). Without it the map is built from the first scan, as in the paper.
+        #[arg(long)]
+        map: Option<PathBuf>,
+        /// Which sensors the filter uses.
+        #[arg(long, value_enum, default_value_t = CliMode::LaserCompass)]
+        mode: CliMode,
+        /// Record the raw readings, /tf_static and the estimates to this MCAP.
+        #[arg(long)]
+        record: Option<PathBuf>,
+        /// Print poses and the summary as JSON lines.
         #[arg(long)]
         json: bool,
     },
@@ -359,6 +388,55 @@ fn print_import(
     Ok(())
 }
 
+fn print_live_event(event: &live::LiveEvent, json: bool) {
+    match event {
+        live::LiveEvent::Pose {
+            t_ns,
+            pose,
+            covariance,
+        } => {
+            if json {
+                let line = serde_json::json!({
+                    "t_ns": t_ns, "x": pose.x, "y": pose.y, "theta": pose.theta,
+                    "sigma_xy": [covariance[(0, 0)].sqrt(), covariance[(1, 1)].sqrt()],
+                    "sigma_theta": covariance[(2, 2)].sqrt(),
+                });
+                println!("{line}");
+            } else {
+                println!(
+                    "{:.3}  x {:8.3} m  y {:8.3} m  θ {:7.2}°  σxy {:.3} m",
+                    *t_ns as f64 * 1e-9,
+                    pose.x,
+                    pose.y,
+                    pose.theta.to_degrees(),
+                    (covariance[(0, 0)] + covariance[(1, 1)]).sqrt()
+                );
+            }
+        }
+        live::LiveEvent::Device { level, text, .. } => {
+            let what = if *level == 0 { "" } else { "warning: " };
+            eprintln!("ekf: {what}{text}");
+        }
+    }
+}
+
+fn print_live_summary(s: &live::LiveSummary) {
+    let f = &s.filter;
+    println!(
+        "live: motion steps {}, scans {} (used {}), lines fused {}, compass fused {}",
+        f.motion_steps, f.lines.scans, f.lines.scans_used, f.lines.fused, f.compass.accepted
+    );
+    for (device, counters) in &s.devices {
+        println!("  {device}: {counters}");
+    }
+    for (device, n) in &s.reconnects {
+        println!("  {device}: reconnected {n} times");
+    }
+    if let Some(r) = &s.recording {
+        println!("  recording: {r}");
+    }
+}
+
 fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
     match cli.command {
         Command::Experiment {
@@ -421,6 +499,44 @@ fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
                     summary.messages, s.scans, s.distance_m, s.compass_outliers, s.slips,
                     s.min_clearance_m
                 );
+            }
+        }
+        Command::Live {
+            laser,
+            base,
+            gps,
+            config,
+            map,
+            mode,
+            record,
+            json,
+        } => {
+            let config = load_config(config.as_deref())?;
+            if let Some(path) = &record {
+                create_parent(path)?;
+            }
+            let options = live::LiveOptions {
+                laser,
+                base,
+                gps,
+                record,
+                map,
+                mode: mode.into(),
+            };
+            let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+            for signal in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+                signal_hook::flag::register(signal, std::sync::Arc::clone(&stop))?;
+            }
+            let outcome = live::run(&config, &options, stop, &mut |event| {
+                print_live_event(&event, json)
+            })?;
+            if json {
+                println!("{}", serde_json::to_string(&outcome.summary)?);
+            } else {
+                print_live_summary(&outcome.summary);
+            }
+            if let Some(failure) = outcome.failure {
+                return Err(failure.into());
             }
         }
         Command::Map {
