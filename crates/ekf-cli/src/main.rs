@@ -90,6 +90,9 @@ enum Command {
         /// Simulated time per run (s); default: the scenario's (120 s).
         #[arg(long)]
         duration: Option<f64>,
+        /// Print the table as JSON (it is also written to OUT_DIR).
+        #[arg(long)]
+        json: bool,
     },
     /// Print the documented default configuration (TOML), or a preset's overrides.
     Config {
@@ -445,6 +448,7 @@ fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
             seed,
             seeds,
             duration,
+            json,
         } => {
             let options = experiment::ExperimentOptions {
                 out_dir,
@@ -452,12 +456,25 @@ fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
                 seeds,
                 duration_s: duration,
             };
-            let json = match figure {
-                Figure::Fig9 => serde_json::to_string_pretty(&experiment::fig9::run(&options)?)?,
-                Figure::Fig11 => serde_json::to_string_pretty(&experiment::fig11::run(&options)?)?,
-                Figure::Fig12 => serde_json::to_string_pretty(&experiment::fig12::run(&options)?)?,
+            let (json_text, text) = match figure {
+                Figure::Fig9 => {
+                    let r = experiment::fig9::run(&options)?;
+                    (serde_json::to_string_pretty(&r)?, r.to_text())
+                }
+                Figure::Fig11 => {
+                    let r = experiment::fig11::run(&options)?;
+                    (serde_json::to_string_pretty(&r)?, r.to_text())
+                }
+                Figure::Fig12 => {
+                    let r = experiment::fig12::run(&options)?;
+                    (serde_json::to_string_pretty(&r)?, r.to_text())
+                }
             };
-            println!("{json}");
+            if json {
+                println!("{json_text}");
+            } else {
+                print!("{text}");
+            }
         }
         Command::Config { preset: None } => print!("{DEFAULT_TOML}"),
         Command::Config { preset: Some(name) } => print!("{}", Config::preset_text(&name)?),

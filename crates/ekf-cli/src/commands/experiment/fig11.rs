@@ -58,6 +58,34 @@ pub struct Fig11Report {
     pub paths: Vec<PathResult>,
 }
 
+impl Fig11Report {
+    /// A human-readable summary: per path, the RMS deviation of each run and per lap.
+    pub fn to_text(&self) -> String {
+        let mut s = format!(
+            "fig11: seed {}, {} s per run; figure {}\n",
+            self.seed, self.duration_s, self.svg
+        );
+        for p in &self.paths {
+            s += &format!("{} (lap {:.2} m):\n", p.scenario, p.lap_length_m);
+            for r in &p.runs {
+                let laps: Vec<String> = r.per_lap_rms_m.iter().map(|v| format!("{v:.3}")).collect();
+                s += &format!(
+                    "  steered by {:<22} RMS deviation {:.4} m (max {:.3} m), per lap [{}] m\n",
+                    r.steering,
+                    r.rms_deviation_m,
+                    r.max_deviation_m,
+                    laps.join(", ")
+                );
+            }
+            s += &format!(
+                "  EKF minus true pose: {:+.4} m; odometry's deviation grows: {}\n",
+                p.ekf_minus_truth_m, p.odometry_deviation_grows
+            );
+        }
+        s
+    }
+}
+
 /// Runs the experiment with the first seed.
 pub fn run(options: &ExperimentOptions) -> Result<Fig11Report, ExperimentError> {
     prepare_dir(&options.out_dir)?;

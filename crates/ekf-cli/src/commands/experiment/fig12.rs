@@ -53,6 +53,28 @@ pub struct Fig12Report {
     pub lines_fused: u64,
 }
 
+impl Fig12Report {
+    /// A human-readable summary.
+    pub fn to_text(&self) -> String {
+        format!(
+            "fig12: seed {}, {} s; figure {}\nfirst-scan map: {} walls; loop {} m inside them, {:.2} m per lap; driven {:.1} m\ndistance from the loop: RMS {:.3} m, max {:.3} m; closest to a wall {:.2} m\nEKF against the truth: position RMSE {:.4} m, heading RMSE {:.3} deg, {} lines fused\n",
+            self.seed,
+            self.duration_s,
+            self.svg,
+            self.map_segments,
+            self.clearance_m,
+            self.lap_length_m,
+            self.distance_m,
+            self.rms_deviation_m,
+            self.max_deviation_m,
+            self.min_clearance_m,
+            self.position_rmse_m,
+            self.heading_rmse_deg,
+            self.lines_fused
+        )
+    }
+}
+
 /// Runs the experiment with the first seed.
 pub fn run(options: &ExperimentOptions) -> Result<Fig12Report, ExperimentError> {
     prepare_dir(&options.out_dir)?;

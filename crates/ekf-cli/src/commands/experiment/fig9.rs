@@ -103,6 +103,49 @@ pub struct Fig9Report {
     pub seeds: Vec<SeedResult>,
 }
 
+impl Fig9Report {
+    /// A human-readable summary: the mean accuracy per mode, the ordering and the NEES.
+    pub fn to_text(&self) -> String {
+        let mut s = format!(
+            "fig9: scenario {}, {} seeds of {} s; figure {}\n{:<14} {:>12} {:>12} {:>14} {:>14}\n",
+            self.scenario,
+            self.seeds.len(),
+            self.duration_s,
+            self.svg,
+            "mode",
+            "RMSE m mean",
+            "RMSE m worst",
+            "head. deg mean",
+            "head. deg worst"
+        );
+        for m in &self.modes {
+            s += &format!(
+                "{:<14} {:>12.4} {:>12.4} {:>14.3} {:>14.3}\n",
+                m.mode,
+                m.position_rmse_m_mean,
+                m.position_rmse_m_worst,
+                m.heading_rmse_deg_mean,
+                m.heading_rmse_deg_worst
+            );
+        }
+        let n = &self.nees;
+        s += &format!(
+            "paper's ordering (odometry worst, laser+compass best) in {} of {} seeds\nNEES of laser+compass over {} runs: {:.2} (95 % band {:.2}..{:.2}: {}), {:.0} % of steps inside\ncompass outliers: {} injected, {} fused\n",
+            self.ordering_holds[0],
+            self.ordering_holds[1],
+            n.runs,
+            n.mean,
+            n.band[0],
+            n.band[1],
+            if n.inside { "inside" } else { "OUTSIDE" },
+            100.0 * n.steps_inside,
+            self.compass_outliers[0],
+            self.compass_outliers[1]
+        );
+        s
+    }
+}
+
 /// Runs the experiment.
 pub fn run(options: &ExperimentOptions) -> Result<Fig9Report, ExperimentError> {
     if options.seeds == 0 {
