@@ -72,6 +72,8 @@ pub(crate) struct ScanPoints {
     x: Vec<f64>,
     y: Vec<f64>,
     range: Vec<f64>,
+    /// `gap_sq[i]`: squared distance between the points of beams `i − 1` and `i`.
+    gap_sq: Vec<f64>,
     /// Runs of valid points, in beam order.
     pub runs: Vec<Run>,
     /// `sums[i]` for `i` in `run.start..=run.end` of each run: moments of the points of
@@ -113,13 +115,14 @@ pub(crate) fn collect(scan: &LaserScan<'_>, table: &BeamTable, max_gap: f64, out
         x,
         y,
         range,
+        gap_sq,
         runs,
         sums,
     } = out;
-    // Every beam, valid or not: a loop without branches, which vectorises. Every slot
+    // Every beam, valid or not, in loops without branches, which vectorise. Every slot
     // is overwritten, so the buffers are only resized (usually a no-op), not cleared.
     let n = scan.ranges.len().min(table.cos.len()).min(table.sin.len());
-    for v in [&mut *x, &mut *y, &mut *range] {
+    for v in [&mut *x, &mut *y, &mut *range, &mut *gap_sq] {
         v.resize(n, 0.0);
     }
     let polar = scan.ranges.iter().zip(&table.cos).zip(&table.sin);
@@ -130,29 +133,33 @@ pub(crate) fn collect(scan: &LaserScan<'_>, table: &BeamTable, max_gap: f64, out
         *x = r * c;
         *y = r * s;
     }
+    // gap_sq[i]: squared distance from the point of beam i − 1 to that of beam i.
+    let (next, previous) = (x.iter().zip(y.iter()).skip(1), x.iter().zip(y.iter()));
+    for (g, ((&x, &y), (&px, &py))) in gap_sq.iter_mut().skip(1).zip(next.zip(previous)) {
+        let (dx, dy) = (x - px, y - py);
+        *g = dx * dx + dy * dy;
+    }
     runs.clear();
     let max_gap_sq = max_gap * max_gap;
     let valid = ValidRanges::of(scan);
     // The first beam of the current run, if the previous beam was valid.
     let mut run_start: Option<usize> = None;
-    let mut previous = (0.0, 0.0);
-    for (i, ((&r, &px), &py)) in range.iter().zip(x.iter()).zip(y.iter()).enumerate() {
+    for (i, (&r, &gap)) in range.iter().zip(gap_sq.iter()).enumerate() {
         if !valid.contains(r) {
             if let Some(start) = run_start.take() {
                 runs.push(start..i);
             }
             continue;
         }
-        if let Some(start) = run_start {
-            let (dx, dy) = (px - previous.0, py - previous.1);
-            if dx * dx + dy * dy > max_gap_sq {
+        match run_start {
+            // Both points are valid, hence finite, and so is `gap`.
+            Some(start) if gap > max_gap_sq => {
                 runs.push(start..i);
                 run_start = Some(i);
             }
-        } else {
-            run_start = Some(i);
+            Some(_) => {}
+            None => run_start = Some(i),
         }
-        previous = (px, py);
     }
     if let Some(start) = run_start {
         runs.push(start..n);
