@@ -119,10 +119,27 @@ fn farthest_from_chord(points: &Points<'_>, range: Range<usize>) -> Option<(usiz
     let mut best = (0, 0.0);
     if len > 0.0 {
         let (nx, ny) = (-dy / len, dx / len);
-        for (i, (&x, &y)) in xs.iter().zip(ys).enumerate() {
-            let d = libm::fabs(nx * (x - fx) + ny * (y - fy));
+        let distance = |x: f64, y: f64| libm::fabs(nx * (x - fx) + ny * (y - fy));
+        // Two points per iteration: half the loop overhead, and room for the compiler to
+        // interleave the two distances.
+        let (x_pairs, y_pairs) = (xs.chunks_exact(2), ys.chunks_exact(2));
+        let last = x_pairs.remainder().first().zip(y_pairs.remainder().first());
+        for (pair, (x, y)) in x_pairs.zip(y_pairs).enumerate() {
+            let (Some(&[x0, x1]), Some(&[y0, y1])) = (x.first_chunk(), y.first_chunk()) else {
+                continue;
+            };
+            let (d0, d1) = (distance(x0, y0), distance(x1, y1));
+            if d0 > best.1 {
+                best = (2 * pair, d0);
+            }
+            if d1 > best.1 {
+                best = (2 * pair + 1, d1);
+            }
+        }
+        if let Some((&x, &y)) = last {
+            let d = distance(x, y);
             if d > best.1 {
-                best = (i, d);
+                best = (xs.len() - 1, d);
             }
         }
     } else {
