@@ -1,7 +1,7 @@
 //! Weighted least-squares line fit with per-point range and bearing noise (Pfister,
 //! Roumeliotis, Burdick, ICRA 2003) and its covariance, the inverse Fisher information.
 
-use super::moments::Moments;
+use super::moments::{Moments, NormalLine};
 use super::points::{Points, Run};
 use ekf_core::wrap_angle;
 use nalgebra::Matrix2;
@@ -55,10 +55,13 @@ pub(crate) struct LineFit {
 /// coupling. `None` when the points do not determine a line (fewer than two distinct
 /// points, or non-finite sums).
 pub(crate) fn fit_line(points: &Points<'_>, pieces: &[Run], noise: &PointNoise) -> Option<LineFit> {
-    let (mut r, mut psi) = total_least_squares(points, pieces)?;
+    let start = total_least_squares(points, pieces)?;
+    let (mut r, mut psi) = (start.r, start.psi);
+    // (sin ψ, cos ψ) of the current ψ.
+    let mut normal = (start.sin, start.cos);
     let mut covariance = Matrix2::zeros();
     for _ in 0..MAX_ITERATIONS {
-        let (j, b) = fisher_information(points, pieces, noise, r, psi);
+        let (j, b) = fisher_information(points, pieces, noise, r, normal);
         covariance = invert_symmetric(&j)?;
         let step = -(covariance * b);
         r += step.x;
@@ -68,6 +71,7 @@ pub(crate) fn fit_line(points: &Points<'_>, pieces: &[Run], noise: &PointNoise) 
         if (step.transpose() * j * step).x < STEP_TOLERANCE {
             break;
         }
+        normal = libm::sincos(psi);
     }
     if r < 0.0 {
         // (r, ψ) → (−r, ψ + π) is the same line; its Jacobian diag(−1, 1) flips the
@@ -152,7 +156,7 @@ fn normalized_residual(
 /// The unweighted total-least-squares line of the points of `pieces` (see
 /// [`Moments::line`]), with the sums taken relative to the first point for numerical
 /// stability.
-fn total_least_squares(points: &Points<'_>, pieces: &[Run]) -> Option<(f64, f64)> {
+fn total_least_squares(points: &Points<'_>, pieces: &[Run]) -> Option<NormalLine> {
     let (ox, oy) = points.xy(pieces.first()?.start)?;
     let mut sum = Moments::default();
     for piece in pieces {
@@ -164,8 +168,9 @@ fn total_least_squares(points: &Points<'_>, pieces: &[Run]) -> Option<(f64, f64)
     sum.line((ox, oy))
 }
 
-/// `J = Σ w_i g_i g_iᵀ` and the gradient half `b = Σ w_i g_i d_i` at `(r, ψ)`; the
-/// angle differences come from the cached beam cos/sin, with no trigonometry per point.
+/// `J = Σ w_i g_i g_iᵀ` and the gradient half `b = Σ w_i g_i d_i` at `(r, ψ)`, `ψ`
+/// given as `(sin ψ, cos ψ)`; the angle differences come from the cached beam cos/sin,
+/// with no trigonometry per point.
 ///
 /// The points go by blocks of [`BLOCK`]: first every point's terms of the sums, in a
 /// loop without dependencies between points, which vectorises; then the sums, point after
@@ -175,9 +180,8 @@ fn fisher_information(
     pieces: &[Run],
     noise: &PointNoise,
     r: f64,
-    psi: f64,
+    (s_psi, c_psi): (f64, f64),
 ) -> (Matrix2<f64>, nalgebra::Vector2<f64>) {
-    let (s_psi, c_psi) = libm::sincos(psi);
     let floor = VARIANCE_FLOOR * noise.range_var;
     let (mut j11, mut j12, mut j22, mut b1, mut b2) = (0.0, 0.0, 0.0, 0.0, 0.0);
     // Per point of a block: w, w g₂, w g₂², w d, w g₂ d.

@@ -3,7 +3,7 @@
 //! of the valid points into runs at invalid beams and range gaps. The later steps address
 //! points by beam, so nothing is copied between them.
 
-use super::moments::Moments;
+use super::moments::{Moments, NormalLine};
 use crate::LaserScan;
 use alloc::vec::Vec;
 use core::ops::Range;
@@ -94,9 +94,9 @@ impl ScanPoints {
         }
     }
 
-    /// The total-least-squares line `(r, ψ)` of the points `range`, a stretch inside
-    /// `run`, from the prefix sums in O(1).
-    pub fn line(&self, run: &Run, range: Range<usize>) -> Option<(f64, f64)> {
+    /// The total-least-squares line of the points `range`, a stretch inside `run`, from
+    /// the prefix sums in O(1).
+    pub fn line(&self, run: &Run, range: Range<usize>) -> Option<NormalLine> {
         let origin = (*self.x.get(run.start)?, *self.y.get(run.start)?);
         self.moments(range)?.line(origin)
     }
@@ -304,7 +304,7 @@ mod tests {
         assert!((x - 3.0 * 0.06_f64.cos()).abs() < 1e-6);
         assert!((y - 3.0 * 0.06_f64.sin()).abs() < 1e-6);
         // The last run is two points at 3 m, 0.01 rad apart: its line from the sums.
-        let (r, psi) = out.line(&out.runs[2].clone(), 5..7).unwrap();
+        let NormalLine { r, psi, .. } = out.line(&out.runs[2].clone(), 5..7).unwrap();
         assert!((psi - 0.055).abs() < 1e-6 && (r - 3.0 * 0.005_f64.cos()).abs() < 1e-6);
     }
 }

@@ -1,6 +1,7 @@
 //! The split step of split-and-merge (iterative end-point fit): a run of points is cut at
 //! the point farthest from the chord between its end points until every piece is straight.
 
+use super::moments::NormalLine;
 use super::points::{Points, Run, ScanPoints};
 use alloc::vec::Vec;
 use core::ops::Range;
@@ -70,8 +71,7 @@ fn refine_split(
     ) else {
         return k;
     };
-    let (left, right) = (normal_form(left), normal_form(right));
-    let nearer = |i: usize, to: (f64, f64, f64), other: (f64, f64, f64)| {
+    let nearer = |i: usize, to: NormalLine, other: NormalLine| {
         points
             .xy(i)
             .is_some_and(|p| distance(p, to) < distance(p, other))
@@ -94,15 +94,9 @@ fn refine_split(
 /// below this fraction of `split_distance²` (rms below a third of it).
 const STRAIGHT_FRACTION: f64 = 1.0 / 9.0;
 
-/// `(r, ψ)` as `(r, cos ψ, sin ψ)`.
-fn normal_form((r, psi): (f64, f64)) -> (f64, f64, f64) {
-    let (s, c) = libm::sincos(psi);
-    (r, c, s)
-}
-
-/// Unsigned distance of a point from the line `(r, cos ψ, sin ψ)`.
-fn distance((x, y): (f64, f64), (r, c, s): (f64, f64, f64)) -> f64 {
-    libm::fabs(x * c + y * s - r)
+/// Unsigned distance of a point from a line.
+fn distance((x, y): (f64, f64), line: NormalLine) -> f64 {
+    libm::fabs(x * line.cos + y * line.sin - line.r)
 }
 
 /// Beam and distance of the point of `range` farthest from the chord through its first
