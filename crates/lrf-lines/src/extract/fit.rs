@@ -158,14 +158,15 @@ fn normalized_residual(
 /// stability.
 fn total_least_squares(points: &Points<'_>, pieces: &[Run]) -> Option<NormalLine> {
     let (ox, oy) = points.xy(pieces.first()?.start)?;
-    let mut sum = Moments::default();
+    let (mut sum, mut n) = (Moments::default(), 0);
     for piece in pieces {
         let (xs, ys) = (points.x.get(piece.clone())?, points.y.get(piece.clone())?);
         for (&x, &y) in xs.iter().zip(ys) {
             sum = sum.plus(x - ox, y - oy);
         }
+        n += xs.len();
     }
-    sum.line((ox, oy))
+    sum.with_count(n).line((ox, oy))
 }
 
 /// `J = Σ w_i g_i g_iᵀ` and the gradient half `b = Σ w_i g_i d_i` at `(r, ψ)`, `ψ`

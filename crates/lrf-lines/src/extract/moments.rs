@@ -16,16 +16,28 @@ pub(crate) struct Moments {
 }
 
 impl Moments {
-    /// These sums plus the point `(x, y)` (relative to the origin).
+    /// These sums plus the point `(x, y)` (relative to the origin), with the count
+    /// unchanged: the count of a stretch of points is its length, set by
+    /// [`Moments::with_count`], so the per-point loops need not add it up.
     #[inline]
     pub fn plus(&self, x: f64, y: f64) -> Self {
         Self {
-            n: self.n + 1.0,
+            n: self.n,
             sx: self.sx + x,
             sy: self.sy + y,
             sxx: self.sxx + x * x,
             syy: self.syy + y * y,
             sxy: self.sxy + x * y,
+        }
+    }
+
+    /// These sums, as those of `n` points. (Counts are far below 2⁵³, so the
+    /// conversion is exact and equals counting one by one in `f64`.)
+    #[inline]
+    pub fn with_count(self, n: usize) -> Self {
+        Self {
+            n: n as f64,
+            ..self
         }
     }
 
@@ -111,21 +123,27 @@ mod tests {
         for i in 0..5 {
             prefix[i + 1] = prefix[i].plus(0.0, i as f64);
         }
-        let NormalLine { r, psi, cos, sin } = prefix[5].line((2.0, 0.0)).unwrap();
+        let NormalLine { r, psi, cos, sin } = prefix[5].with_count(5).line((2.0, 0.0)).unwrap();
         assert!((r - 2.0).abs() < 1e-12 && psi.abs() < 1e-12);
         assert_eq!((sin, cos), libm::sincos(psi));
         // A stretch by difference: points 1..4, same line.
-        let NormalLine { r, psi, .. } = (prefix[4] - prefix[1]).line((2.0, 0.0)).unwrap();
+        let stretch = (prefix[4] - prefix[1]).with_count(3);
+        let NormalLine { r, psi, .. } = stretch.line((2.0, 0.0)).unwrap();
         assert!((r - 2.0).abs() < 1e-12 && psi.abs() < 1e-12);
-        assert_eq!((prefix[2] - prefix[1]).line((2.0, 0.0)), None);
-        let same = Moments::default().plus(1.0, 1.0).plus(1.0, 1.0);
+        assert_eq!((prefix[2] - prefix[1]).with_count(1).line((2.0, 0.0)), None);
+        let same = Moments::default()
+            .plus(1.0, 1.0)
+            .plus(1.0, 1.0)
+            .with_count(2);
         assert_eq!(same.line((0.0, 0.0)), None);
-        assert!(prefix[5].mean_squared_residual().abs() < 1e-12);
+        assert!(prefix[5].with_count(5).mean_squared_residual().abs() < 1e-12);
         // Pairs of points 0.1 either side of y = 0 at x = 0, 1, 2: mean squared residual
         // exactly 0.01.
-        let pairs = (0..3).fold(Moments::default(), |m, i| {
-            m.plus(i as f64, 0.1).plus(i as f64, -0.1)
-        });
+        let pairs = (0..3)
+            .fold(Moments::default(), |m, i| {
+                m.plus(i as f64, 0.1).plus(i as f64, -0.1)
+            })
+            .with_count(6);
         assert!((pairs.mean_squared_residual() - 0.01).abs() < 1e-12);
     }
 }

@@ -103,7 +103,8 @@ impl ScanPoints {
 
     /// The moments of the points `range`, a stretch inside one run, in O(1).
     pub fn moments(&self, range: Range<usize>) -> Option<Moments> {
-        Some(*self.sums.get(range.end)? - *self.sums.get(range.start)?)
+        let sums = *self.sums.get(range.end)? - *self.sums.get(range.start)?;
+        Some(sums.with_count(range.len()))
     }
 }
 
