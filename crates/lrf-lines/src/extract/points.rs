@@ -69,15 +69,19 @@ impl Points<'_> {
 /// moments.
 #[derive(Debug, Clone, Default)]
 pub(crate) struct ScanPoints {
+    /// x of every beam's point (m).
     x: Vec<f64>,
+    /// y of every beam's point (m).
     y: Vec<f64>,
+    /// Every beam's range ρ (m).
     range: Vec<f64>,
-    /// `gap_sq[i]`: squared distance between the points of beams `i − 1` and `i`.
+    /// `gap_sq[i]` for `i ≥ 1`: squared distance between the points of beams `i − 1` and
+    /// `i` (m²); `gap_sq[0]` is not used.
     gap_sq: Vec<f64>,
     /// Runs of valid points, in beam order.
     pub runs: Vec<Run>,
-    /// `sums[i]` for `i` in `run.start..=run.end` of each run: moments of the points of
-    /// all runs before beam `i`, each relative to the first point of its run, so
+    /// `sums[i]` for `i` in `run.start..=run.end` of each run: moments of all the run
+    /// points before beam `i`, each relative to the first point of its run, so
     /// `sums[j] − sums[i]` gives the moments of `i..j` within one run in O(1).
     sums: Vec<Moments>,
 }
