@@ -217,3 +217,42 @@ fn fig12_drives_round_close_to_the_first_scan_walls() {
     // The loop is 0.6 m from the walls; the robot never comes within 0.4 m of one.
     assert!(r.min_clearance_m > 0.4, "{r:?}");
 }
+
+#[test]
+fn a_user_map_becomes_the_room_and_the_resolution_sets_the_beams() {
+    use ekf_cli::mcap_io::BagReader;
+    use ekf_cli::ros2::sensor_msgs::LaserScan;
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("aces.mcap");
+    let map = testdata("aces-map.json");
+    let o = ekf(&[
+        "simulate",
+        map.to_str().unwrap(),
+        "--duration",
+        "3",
+        "--resolution",
+        "1",
+        "--out",
+        out.to_str().unwrap(),
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let summary: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(summary["stats"]["steps"], 30);
+    let bag = BagReader::open(&out).unwrap();
+    let mut scans = 0;
+    for m in bag.messages().unwrap() {
+        let m = m.unwrap();
+        if m.topic() == "/scan" {
+            let scan: LaserScan = m.decode_as().unwrap();
+            assert_eq!(scan.ranges.len(), 181);
+            assert!((f64::from(scan.angle_increment) - 1f64.to_radians()).abs() < 1e-7);
+            scans += 1;
+        }
+    }
+    assert_eq!(scans, 16);
+    // A map file that is not there is named.
+    let o = ekf(&["simulate", "nowhere.json", "--out", out.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("nowhere.json"), "{err}");
+}
