@@ -5,8 +5,8 @@ use crate::config::{Config, ConfigError};
 use crate::mcap_io::WriteError;
 use crate::replay::{load_map, Mode, ReplayError};
 use crate::sim::{
-    simulate, Estimator, Feedback, LogRecorder, Scenario, ScenarioError, SimError, SimOptions,
-    SimStats,
+    simulate, Estimator, Feedback, LaserModel, LogRecorder, Scenario, ScenarioError, SimError,
+    SimOptions, SimStats,
 };
 use serde::Serialize;
 use std::path::Path;
@@ -120,16 +120,15 @@ pub fn load_scenario(name: &str, options: &SimulateOptions) -> Result<Scenario, 
         s.duration_s = d;
     }
     if let Some(r) = options.resolution_deg {
-        if ![0.25, 0.5, 1.0].contains(&r) {
-            return Err(bad(
+        let laser = LaserModel::at_resolution(r, s.dt).ok_or_else(|| {
+            bad(
                 "--resolution",
-                "the LMS 221 scans at 0.25, 0.5 or 1 degree",
-            ));
-        }
-        s.laser.resolution = r.to_radians();
-        // At 0.25° the sweep interlaces over four rotations: the LMS delivers it at
-        // a quarter of the 1° rate, so every 4th step at 38400 baud.
-        s.laser.period_steps = if r == 0.25 { 4 } else { 2 };
+                "the LMS 221 scans at 0.25 (over 100°), 0.5 or 1 degree",
+            )
+        })?;
+        s.laser.resolution = laser.resolution;
+        s.laser.fov = laser.fov;
+        s.laser.period_steps = laser.period_steps;
     }
     if let Some(m) = options.slips_per_minute {
         if !(m.is_finite() && m >= 0.0) {

@@ -1,6 +1,9 @@
 //! Seeded noise for the simulator: one ChaCha8 stream per noise source, so that the same
-//! seed gives the same log on every platform, and changing one sensor's settings does not
-//! reshuffle the noise of the others.
+//! seed gives the same log, and changing one sensor's settings does not reshuffle the
+//! noise of the others. The random streams are the same everywhere; the trigonometry of
+//! the simulation comes from the platform's maths library, so logs are reproduced byte
+//! for byte on one platform (a test checks it on Linux x86-64) and agree to rounding
+//! elsewhere.
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;

@@ -9,6 +9,10 @@ use lrf_lines::LineMap;
 use nalgebra::Point2;
 use serde::Serialize;
 
+/// Largest extent of a user's room (m): the path is a dense polyline, so a map in the
+/// wrong unit would make it huge.
+const MAX_ROOM: f64 = 1000.0;
+
 /// The built-in scenarios, by name.
 pub const BUILTIN: [&str; 5] = ["paper", "triangle", "walls", "l-room", "corridor"];
 
@@ -72,6 +76,16 @@ pub enum ScenarioError {
     /// The map has no walls, or is too small for a path 1 m inside it.
     #[error("{name}: the map's walls span {width:.2} m × {height:.2} m; a path 1 m inside them needs at least 3 m × 3 m")]
     MapTooSmall {
+        /// The map.
+        name: String,
+        /// Width of the walls' bounding box (m).
+        width: f64,
+        /// Height of the walls' bounding box (m).
+        height: f64,
+    },
+    /// The map is larger than a room the simulator drives round (a map in millimetres?).
+    #[error("{name}: the map's walls span {width:.0} m × {height:.0} m; the simulator takes rooms up to 1000 m across (are the coordinates in metres?)")]
+    MapTooLarge {
         /// The map.
         name: String,
         /// Width of the walls' bounding box (m).
@@ -182,6 +196,13 @@ impl Scenario {
         if w < 3.0 || h < 3.0 {
             return Err(too_small(w, h));
         }
+        if w > MAX_ROOM || h > MAX_ROOM {
+            return Err(ScenarioError::MapTooLarge {
+                name: name.into(),
+                width: w,
+                height: h,
+            });
+        }
         let corners = points(&[
             [lo.x + 1.0, lo.y + 1.0],
             [hi.x - 1.0, lo.y + 1.0],
@@ -231,5 +252,10 @@ mod tests {
             Err(ScenarioError::MapTooSmall { .. })
         ));
         assert_eq!(Scenario::builtin("paper").unwrap().steps(), 1200);
+        let huge = Room::polygon(&[[0.0, 0.0], [6000.0, 0.0], [6000.0, 4000.0]], &[], 0.0);
+        assert!(matches!(
+            Scenario::from_map("mm.json", &huge.to_map()),
+            Err(ScenarioError::MapTooLarge { .. })
+        ));
     }
 }

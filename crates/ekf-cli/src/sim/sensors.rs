@@ -69,11 +69,13 @@ impl CompassModel {
     }
 }
 
-/// A SICK LMS 221 in its 8 m / millimetre mode: a 180° sweep, readings in whole mm.
+/// A SICK LMS 221 in its 8 m / millimetre mode: a sweep centred ahead, readings in whole mm.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct LaserModel {
     /// Angular resolution (rad): 0.25°, 0.5° or 1°.
     pub resolution: f64,
+    /// Field of view (rad): 180°, or 100° (the only one the LMS 2xx offers at 0.25°).
+    pub fov: f64,
     /// Range noise σ (m). The paper: 30 mm.
     pub range_sigma: f64,
     /// Bearing noise σ of each beam (rad). The paper: 0.25°.
@@ -84,10 +86,13 @@ pub struct LaserModel {
     pub invalid_probability: f64,
     /// The scanner's pose on the robot.
     pub mount: Pose2<f64>,
-    /// A scan every this many filter steps (at 38400 baud a 361-value telegram takes
-    /// about 0.2 s, so every 2nd step of 0.1 s).
+    /// A scan every this many filter steps: as many as the measured-values telegram
+    /// takes at 38400 baud ([`LaserModel::steps_per_sweep`]; 2 steps of 0.1 s at 0.5°).
     pub period_steps: u32,
 }
+
+/// The serial line's speed (baud): the LMS 2xx over RS-232.
+pub const LASER_BAUD: f64 = 38_400.0;
 
 /// Smallest range the scanner reports (m).
 pub const LASER_RANGE_MIN: f64 = 0.05;
@@ -98,6 +103,7 @@ impl Default for LaserModel {
     fn default() -> Self {
         Self {
             resolution: 0.5f64.to_radians(),
+            fov: std::f64::consts::PI,
             range_sigma: 0.03,
             bearing_sigma: 0.25f64.to_radians(),
             max_range: 8.0,
@@ -109,14 +115,37 @@ impl Default for LaserModel {
 }
 
 impl LaserModel {
-    /// Number of beams in the 180° sweep.
+    /// The default scanner at `resolution_deg` (0.25, 0.5 or 1): 180° wide, or 100° at
+    /// 0.25°, and a sweep as often as its telegram fits through the serial line.
+    pub fn at_resolution(resolution_deg: f64, dt: f64) -> Option<Self> {
+        if ![0.25, 0.5, 1.0].contains(&resolution_deg) {
+            return None;
+        }
+        let fov_deg: f64 = if resolution_deg == 0.25 { 100.0 } else { 180.0 };
+        let mut model = Self {
+            resolution: resolution_deg.to_radians(),
+            fov: fov_deg.to_radians(),
+            ..Self::default()
+        };
+        model.period_steps = model.steps_per_sweep(dt);
+        Some(model)
+    }
+
+    /// Filter steps of `dt` seconds one measured-values telegram takes at
+    /// [`LASER_BAUD`]: 2 bytes per value plus 10 of framing, 10 bits per byte.
+    pub fn steps_per_sweep(&self, dt: f64) -> u32 {
+        let bytes = 2.0 * self.beams() as f64 + 10.0;
+        ((bytes * 10.0 / LASER_BAUD) / dt).ceil().max(1.0) as u32
+    }
+
+    /// Number of beams in the sweep.
     pub fn beams(&self) -> usize {
-        (std::f64::consts::PI / self.resolution).round() as usize + 1
+        (self.fov / self.resolution).round() as usize + 1
     }
 
     /// Bearing of the first beam in the sensor frame (rad): the sweep is centred ahead.
     pub fn angle_min(&self) -> f64 {
-        -std::f64::consts::FRAC_PI_2
+        -self.fov / 2.0
     }
 
     /// One sweep from the robot at `robot` in `room`: each beam's true bearing is off by
@@ -182,6 +211,13 @@ mod tests {
             ..LaserModel::default()
         };
         assert_eq!(model.beams(), 361);
+        assert_eq!(model.steps_per_sweep(0.1), model.period_steps);
+        let fine = LaserModel::at_resolution(0.25, 0.1).unwrap();
+        assert_eq!((fine.beams(), fine.period_steps), (401, 3));
+        assert!((fine.angle_min() + 50f64.to_radians()).abs() < 1e-12);
+        let coarse = LaserModel::at_resolution(1.0, 0.1).unwrap();
+        assert_eq!((coarse.beams(), coarse.period_steps), (181, 1));
+        assert_eq!(LaserModel::at_resolution(0.3, 0.1), None);
         let mut rng = SimRng::new(1, Stream::Laser);
         // Robot at (2.8, 2) facing +x: the sensor at (3, 2), 3 m from the east wall.
         let ranges = model.scan(&Room::paper(), &Pose2::new(2.8, 2.0, 0.0), &mut rng);

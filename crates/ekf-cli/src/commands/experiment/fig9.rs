@@ -151,6 +151,10 @@ pub fn run(options: &ExperimentOptions) -> Result<Fig9Report, ExperimentError> {
     if options.seeds == 0 {
         return Err(ExperimentError::Option("--seeds must be at least 1".into()));
     }
+    let end = options
+        .seed
+        .checked_add(u64::from(options.seeds))
+        .ok_or_else(|| ExperimentError::Option("--seed + --seeds overflows 64 bits".into()))?;
     prepare_dir(&options.out_dir)?;
     let scenario = load_scenario(
         "paper",
@@ -165,7 +169,7 @@ pub fn run(options: &ExperimentOptions) -> Result<Fig9Report, ExperimentError> {
     let svg = options.out_dir.join("fig9.svg");
     let mut seeds = Vec::new();
     let mut nees_runs: Vec<Vec<f64>> = Vec::new();
-    for seed in options.seed..options.seed + u64::from(options.seeds) {
+    for seed in options.seed..end {
         let log = if seed == options.seed {
             &first_log
         } else {
