@@ -39,8 +39,9 @@ pub struct EmulateOptions {
     pub simulate: SimulateOptions,
     /// Write the true poses to this MCAP.
     pub truth: Option<PathBuf>,
-    /// Folder of the device links and the configuration; `None`: a new one under the
-    /// system's temporary folder, removed at the end.
+    /// Folder of the device links and the configuration (which stays there, for `ekf
+    /// replay` of a live recording); `None`: a new one under the system's temporary
+    /// folder, removed at the end.
     pub dir: Option<PathBuf>,
     /// Where the room lies on the globe; `None`: the GPS has no fix (indoors).
     pub gps_origin: Option<GeoOrigin>,
@@ -214,8 +215,8 @@ impl Emulation {
     }
 
     /// Holds the robot until a host is connected, then drives the scenario in real time
-    /// until its end or until `stop` is set; stops the emulators, finishes the truth MCAP
-    /// and removes the configuration.
+    /// until its end or until `stop` is set; stops the emulators (their links go) and
+    /// finishes the truth MCAP.
     pub fn run(mut self, stop: &AtomicBool) -> Result<EmulateSummary, EmulateError> {
         let result = self.drive(stop);
         let Emulation {
@@ -227,9 +228,9 @@ impl Emulation {
             ..
         } = self;
         emulators.stop();
-        let _ = std::fs::remove_file(&config);
         if own_dir {
-            // Only if empty: nothing but our own links and file was in it.
+            // Only if then empty: nothing but our own links and file was in it.
+            let _ = std::fs::remove_file(&config);
             let _ = std::fs::remove_dir(&dir);
         }
         let mut summary = result?;
