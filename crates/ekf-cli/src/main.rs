@@ -182,8 +182,9 @@ enum Command {
         /// with the wall clock as ekf live stamps its recording.
         #[arg(long)]
         truth: Option<PathBuf>,
-        /// Folder for the device links (laser, base, gps) and live.toml; default: a new
-        /// one in the temporary folder.
+        /// Folder for the device links (laser, base, gps) and live.toml (which stays, for
+        /// ekf replay of a recording); default: a new one in the temporary folder,
+        /// removed at the end.
         #[arg(long)]
         dir: Option<PathBuf>,
         /// Where the room's origin lies (LAT,LON[,ALT]; x east, y north): the GPS reports

@@ -266,10 +266,10 @@ impl Emulation {
                 scan: now
                     .scan
                     .clone()
-                    .filter(|_| k % u64::from(scenario.laser.period_steps.max(1)) == 0),
+                    .filter(|_| k.is_multiple_of(u64::from(scenario.laser.period_steps.max(1)))),
                 ..now.clone()
             };
-            let gps = (k % gps_every == 0).then(|| self.gps(&now.truth));
+            let gps = k.is_multiple_of(gps_every).then(|| self.gps(&now.truth));
             self.emulators.sample(robot_sample(
                 &scenario.laser,
                 &held,
@@ -298,7 +298,7 @@ impl Emulation {
             });
             let at = t0 + dt * k as u32;
             let t_ns = epoch0 + dt.as_nanos() as u64 * k;
-            let gps = (k % gps_every == 0).then(|| self.gps(&now.truth));
+            let gps = k.is_multiple_of(gps_every).then(|| self.gps(&now.truth));
             self.emulators.sample(robot_sample(
                 &scenario.laser,
                 &now,

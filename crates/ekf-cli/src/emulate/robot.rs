@@ -161,9 +161,9 @@ mod tests {
             longitude: 105.8,
             altitude: 10.0,
         };
-        // One arc minute of latitude is about 1843 m at 21° N.
-        let f = o.fix_at(0.0, 1843.0);
-        assert!(((f.latitude - 21.0) * 60.0 - 1.0).abs() < 1e-3, "{f:?}");
+        // One arc minute of latitude is 1845.3 m at 21° N (geodetic tables).
+        let f = o.fix_at(0.0, 1845.3);
+        assert!(((f.latitude - 21.0) * 60.0 - 1.0).abs() < 1e-4, "{f:?}");
         assert_eq!("21, 105.8,10".parse::<GeoOrigin>(), Ok(o));
         assert!("21".parse::<GeoOrigin>().is_err());
         assert!("95,0"
@@ -199,7 +199,7 @@ mod tests {
         assert_eq!(s.sweep.as_ref().unwrap().ranges.len(), 3);
         let (l, r, bearing) = s.base_state_at(at + dt / 2);
         assert_eq!((l, r), (ticks_register(-3), 110));
-        let turned = angle_diff(-3.1, 3.1).to_degrees() / 2.0;
+        let turned = angle_diff(-3.1f64, 3.1).to_degrees() / 2.0;
         assert!(
             (bearing - bearing_deg(3.1) + turned).abs() < 1e-9,
             "{bearing}"

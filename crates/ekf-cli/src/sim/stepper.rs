@@ -82,7 +82,9 @@ impl<'s> Simulator<'s> {
         let truth = self.robot.pose();
         let compass = s.compass.read(truth.theta, &mut self.compass_rng);
         let laser = &s.laser;
-        let scan = (self.step % u64::from(laser.period_steps.max(1)) == 0)
+        let scan = self
+            .step
+            .is_multiple_of(u64::from(laser.period_steps.max(1)))
             .then(|| laser.scan(&s.room, &truth, &mut self.laser_rng));
         Sample {
             t_ns: self.step * self.dt_ns,
