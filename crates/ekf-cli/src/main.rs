@@ -187,7 +187,7 @@ enum Command {
         /// removed at the end.
         #[arg(long)]
         dir: Option<PathBuf>,
-        /// Where the room's origin lies (LAT,LON[,ALT]; x east, y north): the GPS reports
+        /// Where the room's origin lies (`LAT,LON[,ALT]`; x east, y north): the GPS reports
         /// fixes of the robot. Default: no fix, as indoors.
         #[arg(long, allow_hyphen_values = true)]
         gps_origin: Option<emulate_robot::GeoOrigin>,
