@@ -4,8 +4,10 @@
 
 use clap::ValueEnum;
 use clap::{Parser, Subcommand};
-use ekf_cli::commands::{compare, evaluate, experiment, import, map, simulate};
+use ekf_cli::commands::{compare, emulate, evaluate, experiment, import, map, simulate};
 use ekf_cli::config::{Config, DEFAULT_TOML};
+use ekf_cli::emulate::robot as emulate_robot;
+use ekf_cli::emulate::Device;
 use ekf_cli::import::{CarmenFlavour, CarmenOptions, SyntheticCompass};
 use ekf_cli::live;
 use ekf_cli::replay::{self, Mode, ReplayOptions};
@@ -159,6 +161,37 @@ enum Command {
         #[arg(long)]
         record: Option<PathBuf>,
         /// Print poses and the summary as JSON lines.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Emulate the robot's devices on pseudo-terminals, driven in real time by the
+    /// simulator, for `ekf live` to run against; prints the device paths.
+    Emulate {
+        /// A built-in scenario (paper, triangle, walls, l-room, corridor) or a line map
+        /// (.json) whose room the robot drives around 1 m inside.
+        #[arg(long, default_value = "paper")]
+        scenario: String,
+        /// Noise seed.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// How long the robot drives (s), from when ekf live has connected; default: the
+        /// scenario's (120 s).
+        #[arg(long)]
+        duration: Option<f64>,
+        /// Write the true pose (/ground_truth, nav_msgs/Odometry) to this MCAP, stamped
+        /// with the wall clock as ekf live stamps its recording.
+        #[arg(long)]
+        truth: Option<PathBuf>,
+        /// Folder for the device links (laser, base, gps) and live.toml (which stays, for
+        /// ekf replay of a recording); default: a new one in the temporary folder,
+        /// removed at the end.
+        #[arg(long)]
+        dir: Option<PathBuf>,
+        /// Where the room's origin lies (`LAT,LON[,ALT]`; x east, y north): the GPS reports
+        /// fixes of the robot. Default: no fix, as indoors.
+        #[arg(long, allow_hyphen_values = true)]
+        gps_origin: Option<emulate_robot::GeoOrigin>,
+        /// Print the summary as JSON.
         #[arg(long)]
         json: bool,
     },
@@ -554,6 +587,74 @@ fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
             }
             if let Some(failure) = outcome.failure {
                 return Err(failure.into());
+            }
+        }
+        Command::Emulate {
+            scenario,
+            seed,
+            duration,
+            truth,
+            dir,
+            gps_origin,
+            json,
+        } => {
+            if let Some(path) = &truth {
+                create_parent(path)?;
+            }
+            let options = emulate::EmulateOptions {
+                scenario,
+                simulate: simulate::SimulateOptions {
+                    seed,
+                    duration_s: duration,
+                    ..simulate::SimulateOptions::default()
+                },
+                truth,
+                dir,
+                gps_origin,
+            };
+            let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+            for signal in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+                signal_hook::flag::register(signal, std::sync::Arc::clone(&stop))?;
+            }
+            let emulation = emulate::Emulation::start(&options)?;
+            let laser = emulation.path(Device::Laser);
+            let base = emulation.path(Device::Base);
+            let gps = emulation.path(Device::Gps);
+            let config = emulation.config_path();
+            println!("laser: {}", laser.display());
+            println!("base: {}", base.display());
+            println!("gps: {}", gps.display());
+            println!("config: {}", config.display());
+            println!(
+                "run: ekf live --laser {} --base {} --gps {} --config {}",
+                laser.display(),
+                base.display(),
+                gps.display(),
+                config.display()
+            );
+            eprintln!("ekf: the robot stands at its start until ekf live has brought up the laser and the base");
+            let summary = emulation.run(&stop)?;
+            if json {
+                println!("{}", serde_json::to_string(&summary)?);
+            } else {
+                println!(
+                    "{} (seed {}): {} steps, {} scans, {:.1} m driven{}{}",
+                    summary.scenario,
+                    summary.seed,
+                    summary.steps,
+                    summary.scans,
+                    summary.distance_m,
+                    if summary.interrupted {
+                        ", interrupted"
+                    } else {
+                        ""
+                    },
+                    summary
+                        .truth
+                        .as_ref()
+                        .map(|t| format!(", {} true poses in {t}", summary.truth_poses))
+                        .unwrap_or_default()
+                );
             }
         }
         Command::Map {

@@ -86,7 +86,8 @@ impl Robot {
             right_ticks: ticks(self.phi_right),
             bearing_deg: (90.0 - self.theta.to_degrees()).rem_euclid(360.0),
             sweep,
-            fix: None,
+            motion: None,
+            gps: None,
         }
     }
 }

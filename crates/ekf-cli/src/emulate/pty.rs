@@ -6,8 +6,9 @@ use std::io;
 use std::path::Path;
 use std::time::Duration;
 
-/// How long a read of the device side waits for host bytes.
-const POLL: Duration = Duration::from_millis(10);
+/// How long a read of the device side waits for host bytes; also how late a new sample's
+/// output (a laser telegram) may leave.
+const POLL: Duration = Duration::from_millis(2);
 
 /// The device side of a pseudo-terminal; the host side is kept open so the device side
 /// does not see hang-ups while no host is connected.

@@ -7,6 +7,7 @@ use super::pty::Pty;
 use super::RobotSample;
 use std::io::{self, Read, Write};
 use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{self, Receiver, RecvTimeoutError, Sender, TryRecvError};
 use std::sync::Arc;
 use std::thread::JoinHandle;
@@ -23,9 +24,11 @@ pub(crate) enum Command {
 }
 
 /// Starts `device` on a new pseudo-terminal reached through `link`.
+/// `ready` tells whether a host has brought the device into operation.
 pub(crate) fn spawn<D: Emulated>(
     device: D,
     link: PathBuf,
+    ready: Arc<AtomicBool>,
 ) -> io::Result<(Sender<Command>, JoinHandle<()>)> {
     let pty = Pty::open(&link)?;
     let (tx, rx) = mpsc::channel();
@@ -36,6 +39,7 @@ pub(crate) fn spawn<D: Emulated>(
             rx,
             sample: None,
             faults: FaultState::default(),
+            ready,
         }
         .run(pty);
     });
@@ -48,6 +52,7 @@ struct Runner<D> {
     rx: Receiver<Command>,
     sample: Option<Arc<RobotSample>>,
     faults: FaultState,
+    ready: Arc<AtomicBool>,
 }
 
 /// Why the inner loop ended.
@@ -72,6 +77,7 @@ impl<D: Emulated> Runner<D> {
                         Err(_) => break,
                     }
                     self.device.power_up();
+                    self.ready.store(false, Ordering::Relaxed);
                 }
             }
         }
@@ -114,6 +120,8 @@ impl<D: Emulated> Runner<D> {
                 for reply in self.device.answer(&buf[..n], self.sample.as_deref()) {
                     self.send(pty, reply);
                 }
+                self.ready
+                    .store(self.device.host_ready(), Ordering::Relaxed);
             }
         }
     }

@@ -57,7 +57,7 @@ impl LogRecorder {
 
     /// Writes one step: at the first, the laser mount; then wheel angles and speeds,
     /// the compass, the scan if any, and the true pose, all stamped `sample.t_ns`.
-    pub fn record(&mut self, sample: &Sample<'_>) -> Result<(), WriteError> {
+    pub fn record(&mut self, sample: &Sample) -> Result<(), WriteError> {
         let t = sample.t_ns;
         let s = &self.scenario;
         if self.last_ticks.is_none() {
@@ -84,7 +84,7 @@ impl LogRecorder {
             &compass_imu(t, sample.compass.heading, variance),
         )?;
         self.messages += 2;
-        if let Some(ranges) = sample.scan {
+        if let Some(ranges) = &sample.scan {
             let l = &s.laser;
             let scan = laser_scan(
                 t,

@@ -3,11 +3,9 @@
 //! `ekf replay` runs) fuses what they measure, and a [`LogRecorder`] may write it all.
 
 use super::log::LogRecorder;
-use super::path::PurePursuit;
-use super::rng::{SimRng, Stream};
-use super::robot::Robot;
 use super::scenario::Scenario;
 use super::sensors::{CompassReading, LASER_RANGE_MIN};
+use super::stepper::Simulator;
 use crate::mcap_io::WriteError;
 use crate::replay::Mode;
 use crate::trajectory::Trajectory;
@@ -65,8 +63,8 @@ pub enum SimError {
 }
 
 /// One step's measurements, as the sensors report them.
-#[derive(Debug, Clone, Copy)]
-pub struct Sample<'a> {
+#[derive(Debug, Clone, PartialEq)]
+pub struct Sample {
     /// Time (ns since the start).
     pub t_ns: u64,
     /// The true pose.
@@ -76,7 +74,7 @@ pub struct Sample<'a> {
     /// The compass reading.
     pub compass: CompassReading,
     /// A laser sweep, on the steps that have one.
-    pub scan: Option<&'a [f32]>,
+    pub scan: Option<Vec<f32>>,
 }
 
 /// Counts of a run.
@@ -143,21 +141,12 @@ pub fn simulate(
     if options.feedback == Feedback::Estimate && options.estimator.is_none() {
         return Err(SimError::NoEstimator);
     }
-    let (mut wheel_rng, mut compass_rng, mut laser_rng) = (
-        SimRng::new(options.seed, Stream::Wheels),
-        SimRng::new(options.seed, Stream::Compass),
-        SimRng::new(options.seed, Stream::Laser),
-    );
     let start = scenario.start;
-    let mut robot = Robot::new(scenario.robot, start);
-    let d = scenario.drive;
-    let mut follower = PurePursuit::new(d.lookahead, d.speed, d.max_turn_rate);
-    follower.join(&scenario.path, &start);
+    let mut sim = Simulator::new(scenario, options.seed);
     let mut filter = match &options.estimator {
         Some(e) => Some(InLoop::new(e, start, scenario)?),
         None => None,
     };
-    let laser = scenario.laser;
     let compass_variance = scenario.compass.sigma.powi(2);
     let mut result = SimResult {
         truth: Trajectory::new(),
@@ -171,37 +160,18 @@ pub fn simulate(
         },
         map: None,
     };
-    let dt_ns = (scenario.dt * 1e9).round() as u64;
     let mut last_ticks = [0i64; 2];
     for k in 0..=scenario.steps() {
-        let t_ns = k * dt_ns;
         if k > 0 {
             let steer_by = match (&filter, options.feedback) {
                 (Some(f), Feedback::Estimate) => f.localizer.pose(),
-                _ => robot.pose(),
+                _ => sim.pose(),
             };
-            let (v, omega) = follower.command(&scenario.path, &steer_by);
-            let before = robot.pose();
-            robot.step(
-                scenario.robot.wheel_speeds(v, omega),
-                scenario.dt,
-                &mut wheel_rng,
-            );
-            let after = robot.pose();
-            result.stats.distance_m += (after.x - before.x).hypot(after.y - before.y);
+            result.stats.distance_m += sim.advance(&steer_by);
         }
-        let truth = robot.pose();
-        let ticks = robot.ticks();
-        let compass = scenario.compass.read(truth.theta, &mut compass_rng);
-        let ranges = (k % u64::from(laser.period_steps.max(1)) == 0)
-            .then(|| laser.scan(&scenario.room, &truth, &mut laser_rng));
-        let sample = Sample {
-            t_ns,
-            truth,
-            ticks,
-            compass,
-            scan: ranges.as_deref(),
-        };
+        let sample = sim.measure();
+        let (t_ns, truth, ticks, compass) =
+            (sample.t_ns, sample.truth, sample.ticks, sample.compass);
         if let Some(r) = recorder.as_deref_mut() {
             r.record(&sample)?;
         }
@@ -209,7 +179,7 @@ pub fn simulate(
         s.steps = k;
         s.compass_readings += 1;
         s.compass_outliers += u64::from(compass.outlier);
-        s.scans += u64::from(ranges.is_some());
+        s.scans += u64::from(sample.scan.is_some());
         let position = Point2::new(truth.x, truth.y);
         s.min_clearance_m = s.min_clearance_m.min(scenario.room.clearance(&position));
         if let Some(f) = filter.as_mut() {
@@ -235,7 +205,7 @@ pub fn simulate(
             .push(scenario.path.distance(&position));
         result.travelled.push(s.distance_m);
     }
-    result.stats.slips = robot.slips();
+    result.stats.slips = sim.slips();
     result.map = filter.map(|f| f.localizer.map().clone());
     Ok(result)
 }
@@ -267,7 +237,7 @@ impl InLoop {
     fn step(
         &mut self,
         wheels: Option<WheelSpeeds<f64>>,
-        sample: &Sample<'_>,
+        sample: &Sample,
         compass_variance: f64,
         scenario: &Scenario,
         stats: &mut SimStats,
@@ -284,7 +254,7 @@ impl InLoop {
                 stats.compass_outliers_fused += u64::from(sample.compass.outlier);
             }
         }
-        if let (Some(ranges), true) = (sample.scan, self.mode.uses_laser()) {
+        if let (Some(ranges), true) = (sample.scan.as_deref(), self.mode.uses_laser()) {
             // The angles as the log stores them (float32), so a replay sees the same scan.
             let laser = &scenario.laser;
             let scan = LaserScan {

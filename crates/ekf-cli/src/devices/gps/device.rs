@@ -25,16 +25,28 @@ fn with_checksum(body: &str) -> String {
     format!("${body}*{cs:02X}\r\n")
 }
 
-/// A GGA and an RMC sentence for a GPS fix at `latitude`/`longitude` (degrees),
-/// `altitude` (m), `hdop`, `utc_s` seconds after midnight UTC.
-pub fn sentences(latitude: f64, longitude: f64, altitude: f64, hdop: f64, utc_s: f64) -> String {
+/// `hhmmss.ss` for `utc_s` seconds after midnight UTC.
+fn utc_time(utc_s: f64) -> String {
     let t = utc_s.rem_euclid(86_400.0);
-    let time = format!(
+    format!(
         "{:02}{:02}{:05.2}",
         (t / 3600.0) as u32,
         ((t % 3600.0) / 60.0) as u32,
         t % 60.0
-    );
+    )
+}
+
+/// The GGA and RMC sentences of a receiver without a fix (fix quality 0, status `V`).
+pub fn no_fix_sentences(utc_s: f64) -> String {
+    let time = utc_time(utc_s);
+    with_checksum(&format!("GPGGA,{time},,,,,0,00,,,M,,M,,"))
+        + &with_checksum(&format!("GPRMC,{time},V,,,,,,,010124,,,N"))
+}
+
+/// A GGA and an RMC sentence for a GPS fix at `latitude`/`longitude` (degrees),
+/// `altitude` (m), `hdop`, `utc_s` seconds after midnight UTC.
+pub fn sentences(latitude: f64, longitude: f64, altitude: f64, hdop: f64, utc_s: f64) -> String {
+    let time = utc_time(utc_s);
     let lat = angle(latitude, 2, 'N', 'S');
     let lon = angle(longitude, 3, 'E', 'W');
     let gga = with_checksum(&format!(

@@ -181,7 +181,7 @@ impl NmeaReader {
 
 #[cfg(test)]
 mod tests {
-    use super::device::sentences;
+    use super::device::{no_fix_sentences, sentences};
     use super::*;
 
     #[test]
@@ -219,5 +219,13 @@ mod tests {
             panic!("a good GGA after the noise must parse");
         };
         assert!((f.latitude + 33.5).abs() < 1e-6 && (f.longitude + 70.25).abs() < 1e-6);
+    }
+
+    #[test]
+    fn a_receiver_without_a_fix_is_valid_but_gives_no_fix() {
+        let mut r = NmeaReader::new();
+        let found = r.push(no_fix_sentences(45_296.5).as_bytes());
+        assert_eq!(found, vec![Sentence::NoFix, Sentence::NoFix]);
+        assert_eq!((r.counters.no_fix, r.counters.invalid), (2, 0));
     }
 }
