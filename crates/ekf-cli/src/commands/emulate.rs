@@ -137,7 +137,7 @@ pub fn live_config(scenario: &Scenario) -> Result<Config, ConfigError> {
         scenario.compass.sigma.powi(2) + 0.1f64.to_radians().powi(2) / 12.0;
     c.devices.ticks_per_revolution = f64::from(robot.ticks_per_rev);
     c.devices.laser_resolution_deg = laser.resolution.to_degrees();
-    c.devices.laser_angle_deg = 180;
+    c.devices.laser_angle_deg = laser.fov.to_degrees().round() as u16;
     Ok(c)
 }
 
