@@ -149,7 +149,12 @@ fn the_laser_compass_filter_is_consistent_over_20_seeds() {
     }
     let nees = fig9::nees_summary(&runs).unwrap();
     assert!((nees.band[0] - 2.024).abs() < 1e-3 && (nees.band[1] - 4.165).abs() < 1e-3);
+    // The time average is inside the band; per step, the ensemble average should be
+    // inside at 95 % of steps for a perfectly consistent filter. This one is inside at
+    // about 84 % and above the band at about 12 % (the first-scan map's fixed errors,
+    // docs/RESULTS.md); the bounds guard that from getting worse.
     assert!(nees.inside, "{nees:?}");
+    assert!(nees.steps_inside >= 0.8 && nees.steps_above <= 0.15, "{nees:?}");
 }
 
 #[test]
