@@ -370,3 +370,16 @@ def test_example_replays_and_plots(tmp_path):
     assert proc.returncode == 0, proc.stderr
     assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and out.stat().st_size > 20_000
     assert "position RMSE" in proc.stdout
+
+
+# ------------------------------------------------------------------------------- stubs
+
+
+def test_type_stubs_match_the_module(tmp_path):
+    """mypy's stubtest compares every name, signature and default of the .pyi stubs with
+    the compiled module (run in a temporary folder, where it leaves its cache)."""
+    proc = subprocess.run([sys.executable, "-m", "mypy.stubtest", "ekf_loc"],
+                          capture_output=True, text=True, cwd=tmp_path)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    package = Path(ekf_loc.__file__).parent
+    assert (package / "py.typed").is_file() and (package / "_ekf_loc.pyi").is_file()

@@ -66,7 +66,17 @@ impl LineUpdates {
     }
 }
 
-/// The extended Kalman filter of a differential-drive robot (Hoang et al., errata fixed).
+/// The extended Kalman filter of a differential-drive robot (Hoang et al., with the
+/// paper's errata fixed): prediction from wheel speeds (eqs. 1-9) or odometry deltas,
+/// compass and laser-line updates in Joseph form with chi-square gates.
+///
+/// `pose` (x, y, theta) defaults to the origin, `covariance` (3x3, symmetric positive
+/// definite) to 1e-4 I. `config` is a dict of the Localizer's config groups; the filter
+/// uses `robot` (wheel_radius, track in m; default 0.05, 0.60), `wheel_noise` (delta,
+/// floor in (rad/s)^2; default 0.01, 1.296e-3), `odometry_noise`, `laser_mount` (x, y,
+/// theta on the robot), `compass` (variance in rad^2, default (2 deg)^2;
+/// gate_probability, default 0.99) and `matching.gate_probability` (line gate, 2 dof).
+/// `gating=False` fuses every measurement.
 #[pyclass(module = "ekf_loc")]
 pub struct Filter {
     core: Core,
@@ -127,7 +137,7 @@ impl Filter {
         Ok(d)
     }
 
-    /// Replaces the state and covariance (validated like the constructor's).
+    /// Replaces the state `pose` (x, y, theta) and the 3x3 `covariance`.
     fn reset(&mut self, pose: &Bound<'_, PyAny>, covariance: &Bound<'_, PyAny>) -> PyResult<()> {
         let pose = pose3(pose, "pose")?;
         let p = matrix3(covariance, "covariance")?;
@@ -135,16 +145,22 @@ impl Filter {
         Ok(())
     }
 
+    /// Prediction from wheel speeds `left`, `right` (rad/s, positive forward) held for
+    /// `dt` seconds (> 0): x- = f(x, u), P- = A P A^T + W Q W^T.
     fn predict_wheels(&mut self, left: f64, right: f64, dt: f64) -> PyResult<()> {
         self.core
             .predict_wheels(left, right, dt)
             .map_err(value_error)
     }
 
+    /// Prediction from an odometry delta: `ds` (m) along the mid-angle heading and
+    /// `dtheta` (rad), with the odometry noise model.
     fn predict_odometry(&mut self, ds: f64, dtheta: f64) -> PyResult<()> {
         self.core.predict_odometry(ds, dtheta).map_err(value_error)
     }
 
+    /// Fuses a compass heading (rad, map frame) with `variance` (rad^2; default the
+    /// config's) if it passes the 1-dof gate; the innovation is wrapped.
     #[pyo3(signature = (heading, variance = None))]
     fn update_compass(&mut self, heading: f64, variance: Option<f64>) -> PyResult<UpdateOutcome> {
         let variance = variance.unwrap_or(self.core.compass_variance);
@@ -154,6 +170,10 @@ impl Filter {
             .map_err(value_error)
     }
 
+    /// Fuses N matched laser lines one at a time, in order: `observed` (N, 2) as (r, psi)
+    /// in the laser frame (m, rad), `covariances` (N, 2, 2) of (r, psi), `map_lines`
+    /// (N, 2) as (rho, beta) in the world frame. Each line passes the 2-dof gate or is
+    /// refused. All or nothing: on an error the filter is left as it was.
     fn update_lines(
         &mut self,
         py: Python<'_>,
@@ -219,6 +239,13 @@ impl Filter {
         })
     }
 
+    /// Runs N steps in one native call (the GIL released): each step predicts from
+    /// `wheels` (N, 3) as (left, right, dt) or `odometry` (N, 2) as (ds, dtheta), then
+    /// fuses `compass` (N,) headings where `compass_mask` (N,) is True (every step without
+    /// a mask), then the first `line_counts[k]` (default K) lines of `line_observed`
+    /// (N, K, 2), `line_covariances` (N, K, 2, 2), `line_map` (N, K, 2). Unused entries
+    /// are never read. Gives exactly the results of the per-call methods. All or nothing:
+    /// an error names the step and leaves the filter as it was.
     #[pyo3(signature = (*, wheels = None, odometry = None, compass = None, compass_mask = None,
                         line_observed = None, line_covariances = None, line_map = None,
                         line_counts = None))]
