@@ -383,3 +383,54 @@ def test_type_stubs_match_the_module(tmp_path):
     assert proc.returncode == 0, proc.stdout + proc.stderr
     package = Path(ekf_loc.__file__).parent
     assert (package / "py.typed").is_file() and (package / "_ekf_loc.pyi").is_file()
+
+
+def garbage(rng):
+    """A random array-like: 0 to 4 dimensions of 0 to 4 entries, with NaN, inf, huge,
+    negative and integer values, sometimes of a wrong dtype or not an array at all."""
+    shape = tuple(rng.integers(0, 5, size=rng.integers(0, 5)))
+    values = rng.choice([0.0, 1.0, -1.0, 1e-300, 1e308, -1e308, np.nan, np.inf, 3.5, 1e-4],
+                        size=shape)
+    kind = rng.integers(0, 8)
+    with np.errstate(all="ignore"):  # casting 1e308 to float32 or int64 is the point
+        if kind == 0:
+            return values.astype(np.float32)
+        if kind == 1:
+            return values.astype(complex)
+        if kind == 2:
+            return values.tolist()
+        if kind == 3:
+            return "not an array"
+        if kind == 4:
+            return np.nan_to_num(values).astype(np.int64)
+    return values
+
+
+def test_no_input_makes_rust_panic():
+    """Random arrays of any shape and value into every array-taking call raise ValueError
+    or TypeError (or succeed), never pyo3's PanicException (a BaseException)."""
+    rng = np.random.default_rng(1)
+    room = ekf_loc.LineMap(ROOM_SEGMENTS)
+    lines = ekf_loc.extract_lines(room_scan(POSE), ANGLE_MIN, ANGLE_INCREMENT)
+    calls = [
+        lambda g: F(g(), g()),
+        lambda g: F().update_lines(g(), g(), g()),
+        lambda g: F().run(wheels=g(), compass=g()),
+        lambda g: F().run(odometry=g(), line_observed=g(), line_covariances=g(),
+                          line_map=g(), line_counts=g()),
+        lambda g: ekf_loc.extract_lines(g(), *rng.choice([0.0, 0.01, np.nan, 1e300], 2)),
+        lambda g: ekf_loc.Lines(g(), g(), g(), g(), g()),
+        lambda g: ekf_loc.LineMap(g()),
+        lambda g: ekf_loc.match_lines(lines, room, g(), g(), g()),
+        lambda g: ekf_loc.Localizer(POSE, np.eye(3) * 1e-3, room).update_scan(g(), 0.0, 0.01),
+        lambda g: ekf_loc.MapBuilder().add_scan(lines, g()),
+    ]
+    outcomes = {"ok": 0, "error": 0}
+    for _ in range(300):
+        for call in calls:
+            try:
+                call(lambda: garbage(rng))
+                outcomes["ok"] += 1
+            except (ValueError, TypeError):
+                outcomes["error"] += 1
+    assert outcomes["ok"] > 0 and outcomes["error"] > 0

@@ -46,6 +46,6 @@ fn _ekf_loc(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(replay::replay, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     // Benchmarks refuse to time an unoptimised build.
-    m.add("_debug_build", cfg!(debug_assertions))?;
+    m.setattr("_debug_build", cfg!(debug_assertions))?;
     Ok(())
 }

@@ -14,6 +14,7 @@ import numpy.typing as npt
 from typing_extensions import TypeAlias
 
 __version__: str
+_debug_build: bool  # True for an unoptimised build (benchmarks refuse it)
 __all__ = [
     "BatchResult",
     "Filter",
