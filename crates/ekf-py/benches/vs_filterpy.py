@@ -44,11 +44,13 @@ def per_step(run, steps, repeats):
 
 def rust_step_us():
     """Median of ekf-core's criterion benchmark of predict + compass + 4 lines (f64)."""
-    subprocess.run(
+    bench = subprocess.run(
         ["cargo", "bench", "-p", "ekf-core", "--bench", "filter", "--",
          "predict_compass_4_lines/f64", "--warm-up-time", "2", "--measurement-time", "5"],
-        cwd=ROOT, check=True, stdout=subprocess.DEVNULL,
+        cwd=ROOT, capture_output=True, text=True,
     )
+    if bench.returncode != 0:
+        sys.exit(f"cargo bench failed:\n{bench.stderr}")
     target = json.loads(subprocess.run(
         ["cargo", "metadata", "--no-deps", "--format-version", "1"],
         cwd=ROOT, check=True, capture_output=True, text=True).stdout)["target_directory"]
