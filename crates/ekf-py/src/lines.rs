@@ -24,26 +24,6 @@ impl Lines {
     pub fn from_vec(lines: Vec<ObservedLine>) -> Self {
         Self { lines }
     }
-
-    /// `(r, ψ)` of each line as an (N, 2) array.
-    pub fn r_psi_array<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let v = self
-            .lines
-            .iter()
-            .flat_map(|l| [l.line.rho, l.line.beta])
-            .collect();
-        new_array(py, v, Ix2(self.lines.len(), 2))
-    }
-
-    /// The covariance of each line as an (N, 2, 2) array.
-    pub fn covariance_array<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray3<f64>>> {
-        let v = self
-            .lines
-            .iter()
-            .flat_map(|l| row_major2(&l.covariance))
-            .collect();
-        new_array(py, v, Ix3(self.lines.len(), 2, 2))
-    }
 }
 
 /// End points of each line as an (N, 2) array.
@@ -134,13 +114,23 @@ impl Lines {
     /// (N, 2) array of `(r, psi)`: distance (m) and normal direction (rad, sensor frame).
     #[getter]
     fn lines<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        self.r_psi_array(py)
+        let v = self
+            .lines
+            .iter()
+            .flat_map(|l| [l.line.rho, l.line.beta])
+            .collect();
+        new_array(py, v, Ix2(self.lines.len(), 2))
     }
 
     /// (N, 2, 2) covariances of `(r, psi)` (m², m·rad, rad²).
     #[getter]
     fn covariances<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray3<f64>>> {
-        self.covariance_array(py)
+        let v = self
+            .lines
+            .iter()
+            .flat_map(|l| row_major2(&l.covariance))
+            .collect();
+        new_array(py, v, Ix3(self.lines.len(), 2, 2))
     }
 
     /// (N, 2) first end points (sensor frame, m), in scan order.
