@@ -11,6 +11,11 @@ use std::path::Path;
 /// it parses to exactly [`Config::default`].
 pub const DEFAULT_TOML: &str = include_str!("default_config.toml");
 
+/// Built-in presets, `(name, TOML text)`: overrides of the defaults for a known robot.
+/// `paper-robot` is the paper's robot with the sensors `ekf simulate` models.
+pub const PRESETS: [(&str, &str); 1] =
+    [("paper-robot", include_str!("../presets/paper-robot.toml"))];
+
 /// Why a configuration could not be used.
 #[derive(Debug, thiserror::Error)]
 pub enum ConfigError {
@@ -30,6 +35,12 @@ pub enum ConfigError {
         path: String,
         /// The parser's message (line, column, key, what was expected).
         message: String,
+    },
+    /// No preset has this name.
+    #[error("unknown preset {name:?}; the presets are: {}", PRESETS.map(|p| p.0).join(", "))]
+    UnknownPreset {
+        /// The name asked for.
+        name: String,
     },
     /// A value is out of range.
     #[error("{path}: {}{key}: {message}", line.map(|l| format!("line {l}: ")).unwrap_or_default())]
@@ -61,6 +72,8 @@ pub struct Config {
     pub laser: LaserConfig,
     /// The filter: robot, noise models, laser mount, extraction, matching, compass.
     pub localizer: LocalizerConfig,
+    /// Serial devices for `ekf live`.
+    pub devices: crate::devices::DevicesConfig,
 }
 
 /// Topic names (DESIGN.md §5 defaults).
@@ -208,6 +221,20 @@ impl Config {
         })
     }
 
+    /// The TOML text of the preset `name` ([`PRESETS`]).
+    pub fn preset_text(name: &str) -> Result<&'static str, ConfigError> {
+        PRESETS
+            .iter()
+            .find(|p| p.0 == name)
+            .map(|p| p.1)
+            .ok_or_else(|| ConfigError::UnknownPreset { name: name.into() })
+    }
+
+    /// The configuration of the preset `name` ([`PRESETS`]).
+    pub fn preset(name: &str) -> Result<Self, ConfigError> {
+        Self::from_toml(Self::preset_text(name)?, &format!("preset {name}"))
+    }
+
     /// Reads and parses a TOML file.
     pub fn load(path: &Path) -> Result<Self, ConfigError> {
         let name = path.display().to_string();
@@ -325,6 +352,22 @@ mod tests {
     fn documented_defaults_are_the_defaults() {
         let parsed = Config::from_toml(DEFAULT_TOML, "default").unwrap();
         assert_eq!(parsed, Config::default());
+    }
+
+    #[test]
+    fn the_paper_robot_preset_sets_the_simulated_sensors_and_keeps_the_rest() {
+        let c = Config::preset("paper-robot").unwrap();
+        let e = &c.localizer.extraction;
+        assert_eq!((e.range_sigma, e.split_distance), (0.03, 0.1));
+        assert!((e.bearing_sigma - 0.25f64.to_radians()).abs() < 1e-15);
+        assert!((c.localizer.compass.variance - 2f64.to_radians().powi(2)).abs() < 1e-15);
+        let d = Config::default();
+        assert_eq!((c.topics, c.localizer.robot), (d.topics, d.localizer.robot));
+        let err = Config::preset("mars-rover").unwrap_err().to_string();
+        assert!(
+            err.contains("\"mars-rover\"") && err.contains("paper-robot"),
+            "{err}"
+        );
     }
 
     #[test]

@@ -4,11 +4,15 @@
 
 pub mod commands;
 pub mod config;
+pub mod devices;
+pub mod emulate;
 pub mod eval;
 pub mod import;
+pub mod live;
 pub mod mcap_io;
 pub mod plot;
 pub mod replay;
 pub mod ros2;
+pub mod sim;
 pub mod trajectory;
 pub mod tum;

@@ -4,9 +4,10 @@
 
 use clap::ValueEnum;
 use clap::{Parser, Subcommand};
-use ekf_cli::commands::{compare, evaluate, import, map};
+use ekf_cli::commands::{compare, evaluate, experiment, import, map, simulate};
 use ekf_cli::config::{Config, DEFAULT_TOML};
 use ekf_cli::import::{CarmenFlavour, CarmenOptions, SyntheticCompass};
+use ekf_cli::live;
 use ekf_cli::replay::{self, Mode, ReplayOptions};
 use std::io::IsTerminal;
 use std::path::PathBuf;
@@ -71,8 +72,96 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
-    /// Print the documented default configuration (TOML).
-    Config,
+    /// The paper's experiments in simulation: an SVG figure and a JSON table each.
+    Experiment {
+        /// fig9 (Fig. 9/10 over seeds, with NEES), fig11 (path following with and
+        /// without the EKF), fig12 (driving round the first-scan map's walls).
+        #[arg(value_enum)]
+        figure: Figure,
+        /// Where the figure, the table and logs go.
+        #[arg(long, default_value = "out/experiments")]
+        out_dir: PathBuf,
+        /// The first seed.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Seeds to run (fig9; the figures show the first).
+        #[arg(long, default_value_t = 20)]
+        seeds: u32,
+        /// Simulated time per run (s); default: the scenario's (120 s).
+        #[arg(long)]
+        duration: Option<f64>,
+        /// Print the table as JSON (it is also written to OUT_DIR).
+        #[arg(long)]
+        json: bool,
+    },
+    /// Print the documented default configuration (TOML), or a preset's overrides.
+    Config {
+        /// A built-in preset instead of the defaults (paper-robot: the simulated robot).
+        #[arg(long)]
+        preset: Option<String>,
+    },
+    /// Simulate the paper's robot in a room and write a ROS 2 bag with exact ground truth
+    /// (/joint_states, /compass, /scan, /tf_static, /ground_truth).
+    Simulate {
+        /// A built-in scenario (paper, triangle, walls, l-room, corridor) or a line map
+        /// (.json) whose room the robot drives around 1 m inside.
+        scenario: String,
+        /// The bag to write.
+        #[arg(long)]
+        out: PathBuf,
+        /// Noise seed: the same seed gives the same bytes.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Simulated time (s); default: the scenario's (120 s).
+        #[arg(long)]
+        duration: Option<f64>,
+        /// What steers the robot along its path.
+        #[arg(long, value_enum, default_value_t = CliSteering::Truth)]
+        steer_by: CliSteering,
+        /// Laser angular resolution (degrees): 0.25, 0.5 or 1.
+        #[arg(long)]
+        resolution: Option<f64>,
+        /// Wheel slip events per minute (default: none).
+        #[arg(long)]
+        slips_per_minute: Option<f64>,
+        /// Compass bias (degrees; default 0).
+        #[arg(long, allow_hyphen_values = true)]
+        compass_bias: Option<f64>,
+        /// Probability of a compass outlier per reading (default 0.02).
+        #[arg(long)]
+        compass_outliers: Option<f64>,
+        /// Print the summary as JSON.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Run the filter on the robot's serial devices (SICK LMS 2xx, MODBUS base
+    /// controller, NMEA GPS), print poses, and record everything for `ekf replay`.
+    Live {
+        /// The laser's serial port.
+        #[arg(long)]
+        laser: String,
+        /// The base controller's serial port (RS-485, MODBUS RTU).
+        #[arg(long)]
+        base: String,
+        /// The GPS's serial port (NMEA).
+        #[arg(long)]
+        gps: Option<String>,
+        /// Configuration file (TOML); `ekf config` prints the defaults.
+        #[arg(long)]
+        config: Option<PathBuf>,
+        /// Line map (JSON). Without it the map is built from the first scan, as in the paper.
+        #[arg(long)]
+        map: Option<PathBuf>,
+        /// Which sensors the filter uses.
+        #[arg(long, value_enum, default_value_t = CliMode::LaserCompass)]
+        mode: CliMode,
+        /// Record the raw readings, /tf_static and the estimates to this MCAP.
+        #[arg(long)]
+        record: Option<PathBuf>,
+        /// Print poses and the summary as JSON lines.
+        #[arg(long)]
+        json: bool,
+    },
     /// Line maps.
     Map {
         #[command(subcommand)]
@@ -173,6 +262,23 @@ enum MapAction {
         #[arg(long)]
         json: bool,
     },
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum Figure {
+    Fig9,
+    Fig11,
+    Fig12,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+enum CliSteering {
+    /// The true pose.
+    Truth,
+    /// The laser + compass EKF in the loop.
+    Ekf,
+    /// Dead reckoning.
+    Odometry,
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -285,9 +391,171 @@ fn print_import(
     Ok(())
 }
 
+fn print_live_event(event: &live::LiveEvent, json: bool) {
+    match event {
+        live::LiveEvent::Pose {
+            t_ns,
+            pose,
+            covariance,
+        } => {
+            if json {
+                let line = serde_json::json!({
+                    "t_ns": t_ns, "x": pose.x, "y": pose.y, "theta": pose.theta,
+                    "sigma_xy": [covariance[(0, 0)].sqrt(), covariance[(1, 1)].sqrt()],
+                    "sigma_theta": covariance[(2, 2)].sqrt(),
+                });
+                println!("{line}");
+            } else {
+                println!(
+                    "{:.3}  x {:8.3} m  y {:8.3} m  θ {:7.2}°  σxy {:.3} m",
+                    *t_ns as f64 * 1e-9,
+                    pose.x,
+                    pose.y,
+                    pose.theta.to_degrees(),
+                    (covariance[(0, 0)] + covariance[(1, 1)]).sqrt()
+                );
+            }
+        }
+        live::LiveEvent::Device { level, text, .. } => {
+            let what = if *level == 0 { "" } else { "warning: " };
+            eprintln!("ekf: {what}{text}");
+        }
+    }
+}
+
+fn print_live_summary(s: &live::LiveSummary) {
+    let f = &s.filter;
+    println!(
+        "live: motion steps {}, scans {} (used {}), lines fused {}, compass fused {}",
+        f.motion_steps, f.lines.scans, f.lines.scans_used, f.lines.fused, f.compass.accepted
+    );
+    for (device, counters) in &s.devices {
+        println!("  {device}: {counters}");
+    }
+    for (device, n) in &s.reconnects {
+        println!("  {device}: reconnected {n} times");
+    }
+    if let Some(r) = &s.recording {
+        println!("  recording: {r}");
+    }
+}
+
 fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
     match cli.command {
-        Command::Config => print!("{DEFAULT_TOML}"),
+        Command::Experiment {
+            figure,
+            out_dir,
+            seed,
+            seeds,
+            duration,
+            json,
+        } => {
+            let options = experiment::ExperimentOptions {
+                out_dir,
+                seed,
+                seeds,
+                duration_s: duration,
+            };
+            let (json_text, text) = match figure {
+                Figure::Fig9 => {
+                    let r = experiment::fig9::run(&options)?;
+                    (serde_json::to_string_pretty(&r)?, r.to_text())
+                }
+                Figure::Fig11 => {
+                    let r = experiment::fig11::run(&options)?;
+                    (serde_json::to_string_pretty(&r)?, r.to_text())
+                }
+                Figure::Fig12 => {
+                    let r = experiment::fig12::run(&options)?;
+                    (serde_json::to_string_pretty(&r)?, r.to_text())
+                }
+            };
+            if json {
+                println!("{json_text}");
+            } else {
+                print!("{text}");
+            }
+        }
+        Command::Config { preset: None } => print!("{DEFAULT_TOML}"),
+        Command::Config { preset: Some(name) } => print!("{}", Config::preset_text(&name)?),
+        Command::Simulate {
+            scenario,
+            out,
+            seed,
+            duration,
+            steer_by,
+            resolution,
+            slips_per_minute,
+            compass_bias,
+            compass_outliers,
+            json,
+        } => {
+            let options = simulate::SimulateOptions {
+                seed,
+                duration_s: duration,
+                steering: match steer_by {
+                    CliSteering::Truth => simulate::Steering::Truth,
+                    CliSteering::Ekf => simulate::Steering::Ekf,
+                    CliSteering::Odometry => simulate::Steering::Odometry,
+                },
+                resolution_deg: resolution,
+                slips_per_minute,
+                compass_bias_deg: compass_bias,
+                compass_outliers,
+            };
+            let scenario = simulate::load_scenario(&scenario, &options)?;
+            create_parent(&out)?;
+            let summary = simulate::simulate_log(&scenario, &options, &out)?;
+            if json {
+                println!("{}", serde_json::to_string_pretty(&summary)?);
+            } else {
+                let s = &summary.stats;
+                println!(
+                    "{}: {} ({} s, seed {}): {} messages, {} scans, {:.1} m driven, {} compass outliers, {} slips, closest to a wall {:.2} m",
+                    summary.out, summary.scenario, summary.duration_s, summary.seed,
+                    summary.messages, s.scans, s.distance_m, s.compass_outliers, s.slips,
+                    s.min_clearance_m
+                );
+            }
+        }
+        Command::Live {
+            laser,
+            base,
+            gps,
+            config,
+            map,
+            mode,
+            record,
+            json,
+        } => {
+            let config = load_config(config.as_deref())?;
+            if let Some(path) = &record {
+                create_parent(path)?;
+            }
+            let options = live::LiveOptions {
+                laser,
+                base,
+                gps,
+                record,
+                map,
+                mode: mode.into(),
+            };
+            let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+            for signal in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+                signal_hook::flag::register(signal, std::sync::Arc::clone(&stop))?;
+            }
+            let outcome = live::run(&config, &options, stop, &mut |event| {
+                print_live_event(&event, json)
+            })?;
+            if json {
+                println!("{}", serde_json::to_string(&outcome.summary)?);
+            } else {
+                print_live_summary(&outcome.summary);
+            }
+            if let Some(failure) = outcome.failure {
+                return Err(failure.into());
+            }
+        }
         Command::Map {
             action:
                 MapAction::Build {

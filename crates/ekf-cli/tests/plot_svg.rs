@@ -150,6 +150,7 @@ fn panels_on_a_grid_in_one_svg() {
                 trajectory: &truth,
             }),
             estimates: &estimates,
+            walls: &[[[-1.0, -1.0], [6.0, -1.0]], [[6.0, -1.0], [6.0, 4.0]]],
         },
         Panel::ErrorsOverTime {
             title: "",
@@ -170,7 +171,10 @@ fn panels_on_a_grid_in_one_svg() {
     };
     plot_figure(&mut svg, &panels, 2, &options).unwrap();
     let (lines, texts) = inspect_svg(&svg);
+    // The trajectories and error series (the walls are two-point segments, not counted
+    // here, and have one legend entry).
     assert_eq!(lines, 4);
+    assert_eq!(texts.iter().filter(|t| *t == "walls").count(), 1);
     for t in ["all", "paths", "third", "truth", "est", "err", "e [m]"] {
         assert!(texts.iter().any(|x| x == t), "{t}: {texts:?}");
     }

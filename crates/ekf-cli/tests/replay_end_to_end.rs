@@ -98,13 +98,14 @@ fn without_tf_static_the_configured_mount_is_used() {
 }
 
 #[test]
-fn tum_has_a_row_at_every_motion_step_and_scan_with_log_times_to_the_nanosecond() {
+fn tum_has_a_row_at_every_motion_step_compass_reading_and_scan_with_log_times_to_the_nanosecond() {
     let dir = tempfile::tempdir().expect("tempdir");
     let (log, items) = write_scenario(dir.path(), "room.mcap", &Scenario::default());
     let tum = dir.path().join("est.tum");
     let s = replay_json(&log, &["--tum", path_str(&tum)]);
 
-    // Every joint state but the first (which only sets the start) and every scan.
+    // Every joint state but the first (which only sets the start), every compass reading
+    // and every scan; one row per stamp.
     let joints: Vec<u64> = items
         .iter()
         .filter(|i| i.topic == "/joint_states")
@@ -115,8 +116,19 @@ fn tum_has_a_row_at_every_motion_step_and_scan_with_log_times_to_the_nanosecond(
         .filter(|i| i.topic == "/scan")
         .map(|i| i.t_ns)
         .collect();
-    let mut expected: Vec<u64> = joints[1..].iter().chain(&scans).copied().collect();
+    let compass: Vec<u64> = items
+        .iter()
+        .filter(|i| i.topic == "/compass")
+        .map(|i| i.t_ns)
+        .collect();
+    let mut expected: Vec<u64> = joints[1..]
+        .iter()
+        .chain(&scans)
+        .chain(&compass)
+        .copied()
+        .collect();
     expected.sort_unstable();
+    expected.dedup();
     let rows = read_tum_rows(&tum);
     let stamps: Vec<&str> = rows.iter().map(|(t, _)| t.as_str()).collect();
     let expected_text: Vec<String> = expected.iter().map(|&t| stamp_text(t)).collect();

@@ -349,6 +349,7 @@ pub fn render_svg<W: Write>(comparison: &Comparison, writer: W) -> Result<(), Pl
                 trajectory: &comparison.reference,
             }),
             estimates: &estimates,
+            walls: &[],
         },
         Panel::ErrorsOverTime {
             title: "Position error",

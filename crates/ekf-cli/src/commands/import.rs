@@ -12,14 +12,9 @@ use crate::import::{
     open_log, read_carmen, read_mrpt, CarmenOptions, ImportError, ImportRecord, ImportStats,
 };
 use crate::mcap_io::{BagWriter, WriteError};
-use crate::ros2::builtin_interfaces::Time;
-use crate::ros2::geometry_msgs::{
-    Point, Pose, PoseWithCovariance, Quaternion, Transform, TransformStamped, Vector3,
+use crate::ros2::build::{
+    compass_imu, laser_scan, mount_transform, odometry, MAP_FRAME, ODOM_FRAME,
 };
-use crate::ros2::nav_msgs::Odometry;
-use crate::ros2::sensor_msgs::{Imu, LaserScan};
-use crate::ros2::std_msgs::Header;
-use crate::ros2::tf2_msgs::TFMessage;
 use ekf_core::Pose2;
 use serde::Serialize;
 use std::path::Path;
@@ -66,12 +61,6 @@ pub struct ImportSummary {
     /// Messages written to the bag.
     pub messages_written: u64,
 }
-
-/// Frame names used in the converted bag.
-const MAP_FRAME: &str = "map";
-const ODOM_FRAME: &str = "odom";
-const BASE_FRAME: &str = "base_link";
-const LASER_FRAME: &str = "laser";
 
 /// Converts `input` into the ROS 2 bag `output`. On a malformed line, everything before
 /// it is written, the bag is finished, and the error names the line.
@@ -176,81 +165,21 @@ impl Converter<'_> {
                     self.written += 1;
                     self.mount = Some(s.mount);
                 }
-                let n = s.ranges.len().max(1) as f64;
-                let scan = LaserScan {
-                    header: header(s.t_ns, LASER_FRAME),
-                    angle_min: s.angle_min as f32,
-                    angle_max: (s.angle_min + (n - 1.0) * s.angle_increment) as f32,
-                    angle_increment: s.angle_increment as f32,
-                    range_min: s.range_min as f32,
-                    range_max: s.range_max as f32,
-                    ranges: s.ranges.clone(),
-                    ..LaserScan::default()
-                };
+                let scan = laser_scan(
+                    s.t_ns,
+                    s.angle_min,
+                    s.angle_increment,
+                    (s.range_min, s.range_max),
+                    s.ranges.clone(),
+                );
                 self.writer.write("/scan", &scan)?
             }
             ImportRecord::Compass(c) => {
-                let imu = Imu {
-                    header: header(c.t_ns, BASE_FRAME),
-                    orientation: Quaternion::from_yaw(c.heading),
-                    // Only the yaw is measured; roll and pitch variances are left at 0
-                    // ("unknown" would be −1 in element 0, which would also void the yaw).
-                    orientation_covariance: [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, c.variance],
-                    angular_velocity_covariance: [-1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    linear_acceleration_covariance: [-1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
-                    ..Imu::default()
-                };
+                let imu = compass_imu(c.t_ns, c.heading, c.variance);
                 self.writer.write("/compass", &imu)?
             }
         }
         self.written += 1;
         Ok(())
-    }
-}
-
-fn header(t_ns: u64, frame: &str) -> Header {
-    Header {
-        stamp: Time::from_nanos(t_ns).unwrap_or_default(),
-        frame_id: frame.into(),
-    }
-}
-
-fn pose_msg(p: &Pose2<f64>) -> Pose {
-    Pose {
-        position: Point {
-            x: p.x,
-            y: p.y,
-            z: 0.0,
-        },
-        orientation: Quaternion::from_yaw(p.theta),
-    }
-}
-
-fn odometry(t_ns: u64, p: &Pose2<f64>, frame: &str) -> Odometry {
-    Odometry {
-        header: header(t_ns, frame),
-        child_frame_id: BASE_FRAME.into(),
-        pose: PoseWithCovariance {
-            pose: pose_msg(p),
-            ..PoseWithCovariance::default()
-        },
-        ..Odometry::default()
-    }
-}
-
-fn mount_transform(t_ns: u64, mount: &Pose2<f64>) -> TFMessage {
-    TFMessage {
-        transforms: vec![TransformStamped {
-            header: header(t_ns, BASE_FRAME),
-            child_frame_id: LASER_FRAME.into(),
-            transform: Transform {
-                translation: Vector3 {
-                    x: mount.x,
-                    y: mount.y,
-                    z: 0.0,
-                },
-                rotation: Quaternion::from_yaw(mount.theta),
-            },
-        }],
     }
 }

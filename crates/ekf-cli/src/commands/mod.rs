@@ -3,5 +3,7 @@
 
 pub mod compare;
 pub mod evaluate;
+pub mod experiment;
 pub mod import;
 pub mod map;
+pub mod simulate;

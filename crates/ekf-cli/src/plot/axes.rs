@@ -149,6 +149,24 @@ pub(super) fn draw_series(
     Ok(())
 }
 
+/// Draws `walls` as thick grey segments, with one legend entry `walls` (none if empty).
+pub(super) fn draw_walls(
+    chart: &mut Chart<'_, '_>,
+    walls: &[super::Wall],
+) -> Result<(), PlotError> {
+    let grey = RGBColor(150, 150, 150);
+    for (i, w) in walls.iter().enumerate() {
+        let ends = w.iter().map(|p| (p[0], p[1]));
+        let series = chart.draw_series(LineSeries::new(ends, grey.stroke_width(4)))?;
+        if i == 0 {
+            series
+                .label("walls")
+                .legend(move |(x, y)| Rectangle::new([(x, y - 2), (x + 16, y + 2)], grey.filled()));
+        }
+    }
+    Ok(())
+}
+
 /// Draws the legend box in the upper-left corner of the chart.
 pub(super) fn draw_legend<'a, 'b: 'a>(chart: &mut Chart<'a, 'b>) -> Result<(), PlotError> {
     chart

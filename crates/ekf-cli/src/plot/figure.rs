@@ -4,7 +4,7 @@
 use super::axes::{render, LABEL_SIZE, MIN_SIZE};
 use super::error_plot::{draw_errors, time_ranges, TimeRanges};
 use super::trajectory_plot::{draw_trajectories, trajectory_ranges};
-use super::{PlotError, PlotOptions, TimeSeries, TrajectorySeries};
+use super::{PlotError, PlotOptions, TimeSeries, TrajectorySeries, Wall};
 use std::io::Write;
 use std::ops::Range;
 
@@ -20,6 +20,9 @@ pub enum Panel<'a> {
         reference: Option<TrajectorySeries<'a>>,
         /// The estimates, coloured in order.
         estimates: &'a [TrajectorySeries<'a>],
+        /// Walls drawn in grey under the trajectories (legend entry `walls`), e.g. a
+        /// line map; may be empty.
+        walls: &'a [Wall],
     },
     /// As [`super::plot_errors_over_time`]: values against time (s since the panel's
     /// earliest stamp).
@@ -39,6 +42,7 @@ enum Prepared<'p, 'a> {
         ranges: (Range<f64>, Range<f64>),
         reference: Option<&'p TrajectorySeries<'a>>,
         estimates: &'a [TrajectorySeries<'a>],
+        walls: &'a [Wall],
     },
     Errors {
         ranges: TimeRanges,
@@ -73,11 +77,13 @@ pub fn plot_figure<W: Write>(
                 Panel::Trajectories {
                     reference,
                     estimates,
+                    walls,
                     ..
                 } => Ok(Prepared::Trajectories {
-                    ranges: trajectory_ranges(reference.as_ref(), estimates)?,
+                    ranges: trajectory_ranges(reference.as_ref(), estimates, walls)?,
                     reference: reference.as_ref(),
                     estimates,
+                    walls,
                 }),
                 Panel::ErrorsOverTime { series, y_desc, .. } => Ok(Prepared::Errors {
                     ranges: time_ranges(series)?,
@@ -116,7 +122,8 @@ pub fn plot_figure<W: Write>(
                     ranges,
                     reference,
                     estimates,
-                } => draw_trajectories(area, ranges, reference, estimates)?,
+                    walls,
+                } => draw_trajectories(area, ranges, reference, estimates, walls)?,
                 Prepared::Errors {
                     ranges,
                     series,

@@ -10,7 +10,7 @@ mod trajectory_plot;
 
 pub use error_plot::{plot_errors_over_time, TimeSeries};
 pub use figure::{plot_figure, Panel};
-pub use trajectory_plot::{plot_trajectories, TrajectorySeries};
+pub use trajectory_plot::{plot_trajectories, TrajectorySeries, Wall};
 
 /// Size and title of a plot.
 #[derive(Debug, Clone, PartialEq, Eq)]

@@ -2,7 +2,7 @@
 //! scales on both axes and a legend.
 
 use super::axes::{
-    build_chart, colour, draw_legend, draw_series, equal_aspect, padded_range, render,
+    build_chart, colour, draw_legend, draw_series, draw_walls, equal_aspect, padded_range, render,
 };
 use super::{PlotError, PlotOptions};
 use crate::trajectory::Trajectory;
@@ -11,6 +11,9 @@ use plotters::prelude::{DrawingArea, SVGBackend};
 use plotters::style::BLACK;
 use std::io::Write;
 use std::ops::Range;
+
+/// A wall to draw: its two end points `[[x, y], [x, y]]` (m).
+pub type Wall = [[f64; 2]; 2];
 
 /// A trajectory with the name it gets in the legend.
 #[derive(Debug, Clone, Copy)]
@@ -34,19 +37,25 @@ pub fn plot_trajectories<W: Write>(
     estimates: &[TrajectorySeries<'_>],
     options: &PlotOptions,
 ) -> Result<(), PlotError> {
-    let ranges = trajectory_ranges(reference.as_ref(), estimates)?;
+    let ranges = trajectory_ranges(reference.as_ref(), estimates, &[])?;
     render(writer, options, |area| {
-        draw_trajectories(area, ranges, reference.as_ref(), estimates)
+        draw_trajectories(area, ranges, reference.as_ref(), estimates, &[])
     })
 }
 
-/// The x and y ranges holding every finite position; [`PlotError::NoData`] if none.
+/// The x and y ranges holding every finite position and wall end; [`PlotError::NoData`]
+/// if none.
 pub(super) fn trajectory_ranges(
     reference: Option<&TrajectorySeries<'_>>,
     estimates: &[TrajectorySeries<'_>],
+    walls: &[Wall],
 ) -> Result<(Range<f64>, Range<f64>), PlotError> {
     let all = || reference.into_iter().chain(estimates);
-    let positions = || all().flat_map(|s| s.trajectory.iter().map(|p| (p.pose.x, p.pose.y)));
+    let positions = || {
+        all()
+            .flat_map(|s| s.trajectory.iter().map(|p| (p.pose.x, p.pose.y)))
+            .chain(walls.iter().flat_map(|w| w.iter().map(|p| (p[0], p[1]))))
+    };
     let x = padded_range(positions().map(|(x, _)| x)).ok_or(PlotError::NoData)?;
     let y = padded_range(positions().map(|(_, y)| y)).ok_or(PlotError::NoData)?;
     Ok((x, y))
@@ -58,8 +67,10 @@ pub(super) fn draw_trajectories(
     (x, y): (Range<f64>, Range<f64>),
     reference: Option<&TrajectorySeries<'_>>,
     estimates: &[TrajectorySeries<'_>],
+    walls: &[Wall],
 ) -> Result<(), PlotError> {
     let mut chart = build_chart(area, "x [m]", "y [m]", |size| equal_aspect(x, y, size))?;
+    draw_walls(&mut chart, walls)?;
     let xy = |s: &TrajectorySeries<'_>| {
         s.trajectory
             .iter()

@@ -65,11 +65,13 @@ impl Mode {
         }
     }
 
-    fn uses_compass(self) -> bool {
+    /// Whether the mode fuses the compass.
+    pub fn uses_compass(self) -> bool {
         matches!(self, Mode::Compass | Mode::LaserCompass)
     }
 
-    fn uses_laser(self) -> bool {
+    /// Whether the mode fuses laser lines.
+    pub fn uses_laser(self) -> bool {
         matches!(self, Mode::Laser | Mode::LaserCompass)
     }
 }
@@ -316,86 +318,21 @@ pub fn replay(
     }
 
     let preamble = read_preamble(&bag, config, options.init_from_truth)?;
-    let mut summary = ReplaySummary {
-        log: log_name.clone(),
-        mode: options.mode.name().into(),
-        motion_topic: motion_topic.clone(),
-        ..ReplaySummary::default()
-    };
-
-    // Laser mount: tf_static, else the configuration.
-    let mut localizer_config = config.localizer.clone();
-    let (mount, source) = laser_mount(&preamble, config)?;
-    localizer_config.laser_mount = mount;
-    summary.laser_mount_source = source.into();
-    summary.laser_mount = [mount.x, mount.y, mount.theta];
-
-    // Initial state.
-    let (start_ns, initial) = if options.init_from_truth {
-        let (t0, pose) = preamble
-            .first_reference
-            .ok_or_else(|| ReplayError::NoReference {
-                log: log_name.clone(),
-                topic: t.ground_truth.clone(),
-            })?;
-        (t0, pose)
-    } else {
-        let i = &config.initial;
-        (0, Pose2::new(i.x, i.y, i.theta))
-    };
-    let (sxy, sth) = (config.initial.sigma_xy, config.initial.sigma_theta);
-    let p0 = Matrix3::from_diagonal(&nalgebra::Vector3::new(sxy * sxy, sxy * sxy, sth * sth));
-
-    let mut localizer = match &options.map {
-        Some(path) => {
-            let map = load_map(path)?;
-            summary.map = path.display().to_string();
-            Localizer::new(localizer_config, initial, p0, map)?
-        }
-        None => {
-            summary.map = "first scan".into();
-            Localizer::with_first_scan_map(localizer_config, initial, p0)?
-        }
-    };
-    summary.map_segments = localizer.map().len();
-
-    let mut out = options
-        .out_mcap
-        .as_deref()
-        .map(OutputBag::create)
-        .transpose()?;
-    let mut run = Run {
+    let mut run = Run::start(
         config,
-        mode: options.mode,
-        start_ns,
+        options,
+        &preamble,
         use_joints,
-        localizer: &mut localizer,
-        out: out.as_mut(),
-        summary: &mut summary,
-        poses: sink::PoseSink::new(options.tum.as_deref(), options.keep_trajectories)?,
-        clock: MotionClock::default(),
-        wheels: WheelTracker::new(&config.motion.left_joint, &config.motion.right_joint),
-        odometry: OdometryTracker::default(),
-        timer: StageTimer {
-            last: Instant::now(),
-            stages: Default::default(),
-        },
-        map_written: false,
-    };
-    if let Some(out) = run.out.as_deref_mut() {
-        if options.map.is_some() {
-            out.map(start_ns, run.localizer.map())?;
-            run.map_written = true;
-        }
-    }
-
+        &log_name,
+        motion_topic,
+    )?;
     let total: u64 = bag.topics().iter().map(|t| t.message_count).sum();
     let mut failure = None;
     let mut done = 0;
     for message in bag.messages()? {
         let step = message
             .map_err(ReplayError::from)
-            .and_then(|m| run.handle(&m, &log_name));
+            .and_then(|m| run.handle(&m));
         if let Err(e) = step {
             failure = Some(e);
             break;
@@ -403,36 +340,7 @@ pub fn replay(
         done += 1;
         progress(done, total);
     }
-
-    // Finish every output, whatever happened above.
-    let Run { poses, timer, .. } = run;
-    // Finish both outputs, then report the first error.
-    let bag_finished = out.map_or(Ok(()), OutputBag::finish);
-    let poses = poses.finish()?;
-    bag_finished?;
-    summary.map_segments = localizer.map().len();
-    let [ext, mat, upd] = &timer.stages;
-    summary.timings = summary::Timings {
-        extraction: ext.timing(),
-        matching: mat.timing(),
-        update: upd.timing(),
-    };
-    summary.poses_written = poses.written;
-    summary.accuracy = poses.accuracy.map(|a| summary::Accuracy {
-        matched_poses: a.matched,
-        position_rmse_m: a.position_rmse,
-        position_max_m: a.position_max,
-        heading_rmse_deg: a.heading_rmse.to_degrees(),
-    });
-    summary.wall_time_s = started.elapsed().as_secs_f64();
-    let kept = poses.kept.unwrap_or_default();
-    Ok(ReplayOutcome {
-        summary,
-        trajectory: kept.estimate,
-        covariances: kept.covariances,
-        reference: kept.reference,
-        failure,
-    })
+    run.finish(started, failure)
 }
 
 /// The laser's mounting pose: `base_frame` → the scan's frame from `/tf_static` when
@@ -571,15 +479,18 @@ struct MotionClock {
     rate: Option<MotionRate>,
 }
 
-/// The state of one replay loop.
-struct Run<'a> {
+/// The state of one replay loop: the filter, its outputs and the trackers that turn
+/// messages into filter inputs. `replay` drives it over a log; `ekf live` over messages
+/// it makes from devices and records, so a replay of the recording repeats it exactly.
+pub(crate) struct Run<'a> {
     config: &'a Config,
+    log: String,
     mode: Mode,
     start_ns: u64,
     use_joints: bool,
-    localizer: &'a mut Localizer,
-    out: Option<&'a mut OutputBag>,
-    summary: &'a mut ReplaySummary,
+    localizer: Localizer,
+    out: Option<OutputBag>,
+    summary: ReplaySummary,
     poses: sink::PoseSink,
     clock: MotionClock,
     wheels: WheelTracker,
@@ -588,9 +499,149 @@ struct Run<'a> {
     map_written: bool,
 }
 
-impl Run<'_> {
+impl<'a> Run<'a> {
+    /// Sets up the filter (laser mount, initial state, map) and creates the outputs.
+    pub(crate) fn start(
+        config: &'a Config,
+        options: &ReplayOptions,
+        preamble: &Preamble,
+        use_joints: bool,
+        log_name: &str,
+        motion_topic: &str,
+    ) -> Result<Self, ReplayError> {
+        let t = &config.topics;
+        let mut summary = ReplaySummary {
+            log: log_name.to_owned(),
+            mode: options.mode.name().into(),
+            motion_topic: motion_topic.to_owned(),
+            ..ReplaySummary::default()
+        };
+
+        // Laser mount: tf_static, else the configuration.
+        let mut localizer_config = config.localizer.clone();
+        let (mount, source) = laser_mount(preamble, config)?;
+        localizer_config.laser_mount = mount;
+        summary.laser_mount_source = source.into();
+        summary.laser_mount = [mount.x, mount.y, mount.theta];
+
+        // Initial state.
+        let (start_ns, initial) = if options.init_from_truth {
+            let (t0, pose) = preamble
+                .first_reference
+                .ok_or_else(|| ReplayError::NoReference {
+                    log: log_name.to_owned(),
+                    topic: t.ground_truth.clone(),
+                })?;
+            (t0, pose)
+        } else {
+            let i = &config.initial;
+            (0, Pose2::new(i.x, i.y, i.theta))
+        };
+        let (sxy, sth) = (config.initial.sigma_xy, config.initial.sigma_theta);
+        let p0 = Matrix3::from_diagonal(&nalgebra::Vector3::new(sxy * sxy, sxy * sxy, sth * sth));
+
+        let localizer = match &options.map {
+            Some(path) => {
+                let map = load_map(path)?;
+                summary.map = path.display().to_string();
+                Localizer::new(localizer_config, initial, p0, map)?
+            }
+            None => {
+                summary.map = "first scan".into();
+                Localizer::with_first_scan_map(localizer_config, initial, p0)?
+            }
+        };
+        summary.map_segments = localizer.map().len();
+
+        let out = options
+            .out_mcap
+            .as_deref()
+            .map(OutputBag::create)
+            .transpose()?;
+        let mut run = Run {
+            config,
+            log: log_name.to_owned(),
+            mode: options.mode,
+            start_ns,
+            use_joints,
+            localizer,
+            out,
+            summary,
+            poses: sink::PoseSink::new(options.tum.as_deref(), options.keep_trajectories)?,
+            clock: MotionClock::default(),
+            wheels: WheelTracker::new(&config.motion.left_joint, &config.motion.right_joint),
+            odometry: OdometryTracker::default(),
+            timer: StageTimer {
+                last: Instant::now(),
+                stages: Default::default(),
+            },
+            map_written: false,
+        };
+        if let Some(out) = run.out.as_mut() {
+            if options.map.is_some() {
+                out.map(start_ns, run.localizer.map())?;
+                run.map_written = true;
+            }
+        }
+        Ok(run)
+    }
+
+    /// The output bag, when there is one (live mode records its raw messages into it).
+    pub(crate) fn output(&mut self) -> Option<&mut OutputBag> {
+        self.out.as_mut()
+    }
+
+    /// The filter.
+    pub(crate) fn localizer(&self) -> &Localizer {
+        &self.localizer
+    }
+
+    /// Finishes every output, whatever happened before, and returns the results with
+    /// `failure` (the error that ended the loop, if any).
+    pub(crate) fn finish(
+        self,
+        started: Instant,
+        failure: Option<ReplayError>,
+    ) -> Result<ReplayOutcome, ReplayError> {
+        let Run {
+            poses,
+            timer,
+            out,
+            localizer,
+            mut summary,
+            ..
+        } = self;
+        // Finish both outputs, then report the first error.
+        let bag_finished = out.map_or(Ok(()), OutputBag::finish);
+        let poses = poses.finish()?;
+        bag_finished?;
+        summary.map_segments = localizer.map().len();
+        let [ext, mat, upd] = &timer.stages;
+        summary.timings = summary::Timings {
+            extraction: ext.timing(),
+            matching: mat.timing(),
+            update: upd.timing(),
+        };
+        summary.poses_written = poses.written;
+        summary.accuracy = poses.accuracy.map(|a| summary::Accuracy {
+            matched_poses: a.matched,
+            position_rmse_m: a.position_rmse,
+            position_max_m: a.position_max,
+            heading_rmse_deg: a.heading_rmse.to_degrees(),
+        });
+        summary.wall_time_s = started.elapsed().as_secs_f64();
+        let kept = poses.kept.unwrap_or_default();
+        Ok(ReplayOutcome {
+            summary,
+            trajectory: kept.estimate,
+            covariances: kept.covariances,
+            reference: kept.reference,
+            failure,
+        })
+    }
+
     /// One message.
-    fn handle(&mut self, message: &BagMessage, log: &str) -> Result<(), ReplayError> {
+    pub(crate) fn handle(&mut self, message: &BagMessage) -> Result<(), ReplayError> {
         let topic = message.topic();
         *self
             .summary
@@ -605,7 +656,7 @@ impl Run<'_> {
             topic == t.odom
         };
         if is_motion {
-            self.motion(message, log)
+            self.motion(message)
         } else if topic == t.scan {
             self.scan(message)
         } else if topic == t.compass && self.mode.uses_compass() {
@@ -632,7 +683,7 @@ impl Run<'_> {
         }
     }
 
-    fn motion(&mut self, message: &BagMessage, log: &str) -> Result<(), ReplayError> {
+    fn motion(&mut self, message: &BagMessage) -> Result<(), ReplayError> {
         let now = message.log_time;
         let topic = message.topic();
         let step = match message.decode()? {
@@ -642,7 +693,7 @@ impl Run<'_> {
                     self.wheels
                         .speeds(stamp, &js)
                         .map_err(|names| ReplayError::MissingJoints {
-                            log: log.into(),
+                            log: self.log.clone(),
                             topic: topic.into(),
                             left: self.config.motion.left_joint.clone(),
                             right: self.config.motion.right_joint.clone(),
@@ -741,7 +792,7 @@ impl Run<'_> {
         } else {
             self.summary.compass.rejected += 1;
         }
-        if let Some(out) = self.out.as_deref_mut() {
+        if let Some(out) = self.out.as_mut() {
             let (level, text) = if outcome.accepted {
                 (0, "fused")
             } else {
@@ -757,9 +808,10 @@ impl Run<'_> {
                     ("heading_rad", format!("{:.6}", h.heading)),
                 ],
             )?;
-            out.pose(now, &self.localizer.pose(), self.localizer.covariance())?;
         }
-        Ok(())
+        // The corrected pose, like after a motion step or a scan: at one stamp the TUM
+        // trajectory and the accuracy keep the last.
+        self.record_pose(now)
     }
 
     fn scan(&mut self, message: &BagMessage) -> Result<(), ReplayError> {
@@ -798,7 +850,7 @@ impl Run<'_> {
             l.rejected += report.rejected as u64;
             l.fused += report.fused as u64;
             l.refused += report.refused as u64;
-            if let Some(out) = self.out.as_deref_mut() {
+            if let Some(out) = self.out.as_mut() {
                 if report.map_built && !self.map_written {
                     out.map(now, self.localizer.map())?;
                     self.map_written = true;
@@ -851,7 +903,7 @@ impl Run<'_> {
         let pose = self.localizer.pose();
         self.poses
             .estimate(StampedPose::new(now, pose), self.localizer.covariance())?;
-        if let Some(out) = self.out.as_deref_mut() {
+        if let Some(out) = self.out.as_mut() {
             out.pose(now, &pose, self.localizer.covariance())?;
         }
         Ok(())

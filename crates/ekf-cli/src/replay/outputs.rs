@@ -173,6 +173,12 @@ impl OutputBag {
         )
     }
 
+    /// The underlying bag writer, for messages of other kinds (live mode records its raw
+    /// device readings next to the estimates).
+    pub fn writer(&mut self) -> &mut BagWriter {
+        &mut self.writer
+    }
+
     /// Finishes the bag (summary and footer). Dropping it without calling this still
     /// finishes it, best effort.
     pub fn finish(self) -> Result<(), WriteError> {

@@ -14,6 +14,7 @@
 //! ```
 
 mod any;
+pub mod build;
 pub mod builtin_interfaces;
 pub mod cdr;
 pub mod diagnostic_msgs;

@@ -9,13 +9,10 @@
 #![allow(dead_code)] // each test file uses a different part
 
 use ekf_cli::mcap_io::{BagReader, BagWriter};
-use ekf_cli::ros2::builtin_interfaces::Time;
-use ekf_cli::ros2::geometry_msgs::{
-    Point, Pose, PoseWithCovariance, Quaternion, Transform, TransformStamped, Vector3,
-};
+use ekf_cli::ros2::build::{self, header};
+use ekf_cli::ros2::geometry_msgs::{Quaternion, Transform, TransformStamped, Vector3};
 use ekf_cli::ros2::nav_msgs::Odometry;
 use ekf_cli::ros2::sensor_msgs::{Imu, JointState, LaserScan};
-use ekf_cli::ros2::std_msgs::Header;
 use ekf_cli::ros2::tf2_msgs::TFMessage;
 use ekf_cli::ros2::AnyMessage;
 use std::collections::BTreeMap;
@@ -279,35 +276,9 @@ fn ray_cast(ox: f64, oy: f64, a: f64) -> f64 {
     best
 }
 
-fn header(t_ns: u64, frame: &str) -> Header {
-    Header {
-        stamp: Time::from_nanos(t_ns).expect("stamp fits"),
-        frame_id: frame.into(),
-    }
-}
-
-fn pose_msg(p: &P2) -> Pose {
-    Pose {
-        position: Point {
-            x: p.x,
-            y: p.y,
-            z: 0.0,
-        },
-        orientation: Quaternion::from_yaw(p.theta),
-    }
-}
-
-/// A `nav_msgs/Odometry` at `t_ns` with pose `p`.
+/// A `nav_msgs/Odometry` at `t_ns` with pose `p` in frame `odom`.
 pub fn odometry(t_ns: u64, p: &P2) -> Odometry {
-    Odometry {
-        header: header(t_ns, "odom"),
-        child_frame_id: "base_link".into(),
-        pose: PoseWithCovariance {
-            pose: pose_msg(p),
-            ..PoseWithCovariance::default()
-        },
-        ..Odometry::default()
-    }
+    build::odometry(t_ns, &ekf_core::Pose2::new(p.x, p.y, p.theta), "odom")
 }
 
 /// A joint state with the given names, positions and velocities.

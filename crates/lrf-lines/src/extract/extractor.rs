@@ -3,7 +3,7 @@
 
 use super::fit::{fit_trimmed, PointNoise};
 use super::merge::{merge_collinear, Candidate, MergeRule};
-use super::points::{collect, BeamTable, Run, ScanPoint, ScanPoints};
+use super::points::{collect, BeamTable, Points, Run, ScanPoints};
 use super::split::split_runs;
 use super::{ExtractionError, ExtractionParams};
 use crate::{LaserScan, ObservedLine};
@@ -81,18 +81,31 @@ impl LineExtractor {
         scan.validate()?;
         self.beams.update(scan);
         collect(scan, &self.beams, self.params.max_point_gap, &mut self.scan);
+        let points = self.scan.points(&self.beams);
         self.segments.clear();
         split_runs(
             &self.scan,
+            &points,
             self.params.split_distance,
             self.params.min_points,
             &mut self.stack,
             &mut self.segments,
         );
-        self.fit_segments();
-        merge_collinear(&self.scan.points, &mut self.candidates, &self.merge_rule);
+        fit_segments(
+            &points,
+            &mut self.segments,
+            &mut self.candidates,
+            &self.params,
+            &self.merge_rule.noise,
+        );
+        merge_collinear(
+            &points,
+            &self.segments,
+            &mut self.candidates,
+            &self.merge_rule,
+        );
         for c in &self.candidates {
-            if let Some(line) = observed_line(&self.scan.points, c) {
+            if let Some(line) = observed_line(&points, &self.segments, c) {
                 if line.length() >= self.params.min_length {
                     out.push(line);
                 }
@@ -100,57 +113,62 @@ impl LineExtractor {
         }
         Ok(())
     }
+}
 
-    /// Fits every segment long enough (trimming outlying end points), and moves the
-    /// fitted points to the front of the point buffer so the kept segments tile it without
-    /// holes: a merge then refits one contiguous range, never the dropped clutter between
-    /// two pieces. Compaction writes at or before the segment being read (`copy_within`).
-    fn fit_segments(&mut self) {
-        self.candidates.clear();
-        let mut write = 0;
-        for seg in &self.segments {
-            let (Some(first), Some(last)) = (
-                self.scan.points.get(seg.start),
-                seg.end.checked_sub(1).and_then(|i| self.scan.points.get(i)),
-            ) else {
-                continue;
-            };
-            if seg.len() < self.params.min_points
-                || libm::hypot(last.x - first.x, last.y - first.y) < self.params.min_length
-            {
-                continue;
-            }
-            let Some((kept, fit)) = self
-                .scan
-                .points
-                .get(seg.clone())
-                .and_then(|p| fit_trimmed(p, &self.merge_rule.noise, self.params.min_points))
-            else {
-                continue;
-            };
-            let support = write..write + kept.len();
-            self.scan
-                .points
-                .copy_within(seg.start + kept.start..seg.start + kept.end, write);
-            write = support.end;
-            self.candidates.push(Candidate { support, fit });
+/// Fits every segment long enough (trimming outlying end points) into `candidates`, one
+/// piece each, and keeps in `segments` the fitted pieces only (their trimmed beam ranges,
+/// in order), so the candidates' supports tile it without holes: a merge then refits its
+/// pieces, never the dropped clutter between them.
+fn fit_segments(
+    points: &Points<'_>,
+    segments: &mut Vec<Run>,
+    candidates: &mut Vec<Candidate>,
+    params: &ExtractionParams,
+    noise: &PointNoise,
+) {
+    candidates.clear();
+    let mut kept = 0;
+    for i in 0..segments.len() {
+        let Some(seg) = segments.get(i).cloned() else {
+            continue;
+        };
+        let (Some(first), Some(last)) = (
+            points.xy(seg.start),
+            seg.end.checked_sub(1).and_then(|i| points.xy(i)),
+        ) else {
+            continue;
+        };
+        if seg.len() < params.min_points
+            || libm::hypot(last.0 - first.0, last.1 - first.1) < params.min_length
+        {
+            continue;
         }
-        // From here on `scan.points` holds the candidates' supports only; its runs and
-        // prefix sums are stale until the next `collect`.
-        self.scan.points.truncate(write);
+        let Some((piece, fit)) = fit_trimmed(points, seg, noise, params.min_points) else {
+            continue;
+        };
+        if let Some(slot) = segments.get_mut(kept) {
+            *slot = piece;
+        }
+        candidates.push(Candidate {
+            support: kept..kept + 1,
+            fit,
+        });
+        kept += 1;
     }
+    segments.truncate(kept);
 }
 
 /// The candidate as an [`ObservedLine`], end points projected onto the fitted line.
-fn observed_line(points: &[ScanPoint], c: &Candidate) -> Option<ObservedLine> {
+fn observed_line(points: &Points<'_>, pieces: &[Run], c: &Candidate) -> Option<ObservedLine> {
     let line = Line::new(c.fit.r, c.fit.psi).ok()?;
-    let first = points.get(c.support.start)?;
-    let last = points.get(c.support.end.checked_sub(1)?)?;
+    let support = pieces.get(c.support.clone())?;
+    let first = points.xy(support.first()?.start)?;
+    let last = points.xy(support.last()?.end.checked_sub(1)?)?;
     Some(ObservedLine {
         line,
         covariance: c.fit.covariance,
-        start: line.project(&Point2::new(first.x, first.y)),
-        end: line.project(&Point2::new(last.x, last.y)),
-        num_points: c.support.len(),
+        start: line.project(&Point2::new(first.0, first.1)),
+        end: line.project(&Point2::new(last.0, last.1)),
+        num_points: support.iter().map(Run::len).sum(),
     })
 }

@@ -2,17 +2,18 @@
 //! `(r, ψ)`, a gap check, and a refit of the union of their points.
 
 use super::fit::{fit_line, LineFit, PointNoise};
-use super::points::{squared_distance, Run, ScanPoint};
+use super::points::{Points, Run};
 use alloc::vec::Vec;
 use core::f64::consts::{FRAC_PI_2, PI};
+use core::ops::Range;
 use ekf_core::wrap_angle;
 use nalgebra::Vector2;
 
-/// A fitted line and the points it was fitted to, `points[support]`.
+/// A fitted line and the points it was fitted to: the beams of `pieces[support]`.
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) struct Candidate {
-    /// The points of the line: a contiguous range of the compacted point buffer.
-    pub support: Run,
+    /// The points of the line: a range of the fitted pieces (beam ranges, in scan order).
+    pub support: Range<usize>,
     /// The weighted fit of those points.
     pub fit: LineFit,
 }
@@ -28,12 +29,14 @@ pub(crate) struct MergeRule {
     pub noise: PointNoise,
 }
 
-/// Merges neighbours in `candidates` (in scan order, with supports that tile `points`
-/// without holes) while they pass [`same_line`] and their gap is at most `max_gap`; the
-/// merged line is the weighted refit of both supports. Works in place, left to right,
-/// so a wall cut into several pieces merges back into one.
+/// Merges neighbours in `candidates` (in scan order, with supports that tile `pieces`
+/// without holes) while their `(r, ψ)` pass the chi-square gate and their gap is at most
+/// `max_gap`; the merged line is the weighted refit of both supports' points (never the
+/// dropped clutter between them). Works in place, left to right, so a wall cut into
+/// several pieces merges back into one.
 pub(crate) fn merge_collinear(
-    points: &[ScanPoint],
+    points: &Points<'_>,
+    pieces: &[Run],
     candidates: &mut Vec<Candidate>,
     rule: &MergeRule,
 ) {
@@ -41,7 +44,7 @@ pub(crate) fn merge_collinear(
     for i in 0..candidates.len() {
         let next = candidates[i].clone();
         if let Some(previous) = kept.checked_sub(1).and_then(|k| candidates.get(k)) {
-            if let Some(merged) = try_merge(points, previous, &next, rule) {
+            if let Some(merged) = try_merge(points, pieces, previous, &next, rule) {
                 candidates[kept - 1] = merged;
                 continue;
             }
@@ -53,21 +56,26 @@ pub(crate) fn merge_collinear(
 }
 
 fn try_merge(
-    points: &[ScanPoint],
+    points: &Points<'_>,
+    pieces: &[Run],
     a: &Candidate,
     b: &Candidate,
     rule: &MergeRule,
 ) -> Option<Candidate> {
-    let last = points.get(a.support.end.checked_sub(1)?)?;
-    let first = points.get(b.support.start)?;
+    let last = points.xy(pieces
+        .get(a.support.end.checked_sub(1)?)?
+        .end
+        .checked_sub(1)?)?;
+    let first = points.xy(pieces.get(b.support.start)?.start)?;
+    let (dx, dy) = (last.0 - first.0, last.1 - first.1);
     if a.support.end != b.support.start
-        || squared_distance(last, first) > rule.max_gap * rule.max_gap
+        || dx * dx + dy * dy > rule.max_gap * rule.max_gap
         || mahalanobis_squared(&a.fit, &b.fit)? > rule.gate
     {
         return None;
     }
     let support = a.support.start..b.support.end;
-    let fit = fit_line(points.get(support.clone())?, &rule.noise)?;
+    let fit = fit_line(points, pieces.get(support.clone())?, &rule.noise)?;
     Some(Candidate { support, fit })
 }
 

@@ -2,10 +2,11 @@
 //! weighted least-squares fit with an honest 2×2 covariance per line, and merging of
 //! adjacent collinear lines by a chi-square test (DESIGN.md §4).
 //!
-//! The pipeline, one private module per step: `points` (valid beams → points, runs at
-//! invalid beams and gaps) → `split` (iterative end-point fit) → `fit` (weighted fit with
-//! end trimming, Pfister et al. 2003) → `merge` (collinear merging); `extractor` drives
-//! them with reusable buffers, so steady-state extraction does not allocate. The public
+//! The pipeline, one private module per step: `points` (beams → points indexed by beam,
+//! runs of valid ones cut at invalid beams and gaps) → `split` (iterative end-point fit)
+//! → `fit` (weighted fit with end trimming, Pfister et al. 2003) → `merge` (collinear
+//! merging); each step passes beam ranges to the next. `extractor` drives them with
+//! reusable buffers, so steady-state extraction does not allocate. The public
 //! surface is [`LineExtractor`], [`ExtractionParams`] and [`ExtractionError`].
 
 mod error;

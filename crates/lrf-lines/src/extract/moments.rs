@@ -16,16 +16,28 @@ pub(crate) struct Moments {
 }
 
 impl Moments {
-    /// These sums plus the point `(x, y)` (relative to the origin).
+    /// These sums plus the point `(x, y)` (relative to the origin), with the count
+    /// unchanged: the count of a stretch of points is its length, set by
+    /// [`Moments::with_count`], so the per-point loops need not add it up.
     #[inline]
     pub fn plus(&self, x: f64, y: f64) -> Self {
         Self {
-            n: self.n + 1.0,
+            n: self.n,
             sx: self.sx + x,
             sy: self.sy + y,
             sxx: self.sxx + x * x,
             syy: self.syy + y * y,
             sxy: self.sxy + x * y,
+        }
+    }
+
+    /// These sums, as those of `n` points. (Counts are far below 2⁵³, so the
+    /// conversion is exact and equals counting one by one in `f64`.)
+    #[inline]
+    pub fn with_count(self, n: usize) -> Self {
+        Self {
+            n: n as f64,
+            ..self
         }
     }
 
@@ -51,7 +63,7 @@ impl Moments {
     /// `ψ = ½ atan2(−2 c_xy, c_yy − c_xx)` (the normal of least spread) and
     /// `r = x̄ cos ψ + ȳ sin ψ` through the centroid (r may be negative). `None` for fewer
     /// than two points or no spread.
-    pub fn line(&self, origin: (f64, f64)) -> Option<(f64, f64)> {
+    pub fn line(&self, origin: (f64, f64)) -> Option<NormalLine> {
         if self.n < 2.0 {
             return None;
         }
@@ -64,10 +76,24 @@ impl Moments {
             return None;
         }
         let psi = 0.5 * libm::atan2(-2.0 * cxy, cyy - cxx);
-        let (s, c) = libm::sincos(psi);
-        let r = (origin.0 + mx) * c + (origin.1 + my) * s;
-        r.is_finite().then_some((r, psi))
+        let (sin, cos) = libm::sincos(psi);
+        let r = (origin.0 + mx) * cos + (origin.1 + my) * sin;
+        r.is_finite().then_some(NormalLine { r, psi, cos, sin })
     }
+}
+
+/// A line `x cos ψ + y sin ψ = r` with the cos and sin of its `ψ`, which its users need
+/// too.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct NormalLine {
+    /// r (m); may be negative.
+    pub r: f64,
+    /// ψ (rad).
+    pub psi: f64,
+    /// cos ψ.
+    pub cos: f64,
+    /// sin ψ.
+    pub sin: f64,
 }
 
 impl Sub for Moments {
@@ -97,20 +123,27 @@ mod tests {
         for i in 0..5 {
             prefix[i + 1] = prefix[i].plus(0.0, i as f64);
         }
-        let (r, psi) = prefix[5].line((2.0, 0.0)).unwrap();
+        let NormalLine { r, psi, cos, sin } = prefix[5].with_count(5).line((2.0, 0.0)).unwrap();
         assert!((r - 2.0).abs() < 1e-12 && psi.abs() < 1e-12);
+        assert_eq!((sin, cos), libm::sincos(psi));
         // A stretch by difference: points 1..4, same line.
-        let (r, psi) = (prefix[4] - prefix[1]).line((2.0, 0.0)).unwrap();
+        let stretch = (prefix[4] - prefix[1]).with_count(3);
+        let NormalLine { r, psi, .. } = stretch.line((2.0, 0.0)).unwrap();
         assert!((r - 2.0).abs() < 1e-12 && psi.abs() < 1e-12);
-        assert_eq!((prefix[2] - prefix[1]).line((2.0, 0.0)), None);
-        let same = Moments::default().plus(1.0, 1.0).plus(1.0, 1.0);
+        assert_eq!((prefix[2] - prefix[1]).with_count(1).line((2.0, 0.0)), None);
+        let same = Moments::default()
+            .plus(1.0, 1.0)
+            .plus(1.0, 1.0)
+            .with_count(2);
         assert_eq!(same.line((0.0, 0.0)), None);
-        assert!(prefix[5].mean_squared_residual().abs() < 1e-12);
+        assert!(prefix[5].with_count(5).mean_squared_residual().abs() < 1e-12);
         // Pairs of points 0.1 either side of y = 0 at x = 0, 1, 2: mean squared residual
         // exactly 0.01.
-        let pairs = (0..3).fold(Moments::default(), |m, i| {
-            m.plus(i as f64, 0.1).plus(i as f64, -0.1)
-        });
+        let pairs = (0..3)
+            .fold(Moments::default(), |m, i| {
+                m.plus(i as f64, 0.1).plus(i as f64, -0.1)
+            })
+            .with_count(6);
         assert!((pairs.mean_squared_residual() - 0.01).abs() < 1e-12);
     }
 }

@@ -1,140 +1,201 @@
-//! Polar → Cartesian conversion of the valid beams, with the beams' cos/sin cached across
-//! scans of the same geometry, and the cut of the points into runs at invalid beams and
-//! range gaps.
+//! Polar → Cartesian conversion of the beams into arrays indexed by beam (structure of
+//! arrays), with the beams' cos/sin cached across scans of the same geometry, and the cut
+//! of the valid points into runs at invalid beams and range gaps. The later steps address
+//! points by beam, so nothing is copied between them.
 
-use super::moments::Moments;
+use super::moments::{Moments, NormalLine};
 use crate::LaserScan;
 use alloc::vec::Vec;
 use core::ops::Range;
-
-/// A valid reading as a point: `(x, y) = ρ (cos φ, sin φ)` in the sensor frame, keeping
-/// `ρ` and `(cos φ, sin φ)` for the weighted fit.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) struct ScanPoint {
-    /// x = ρ cos φ (m).
-    pub x: f64,
-    /// y = ρ sin φ (m).
-    pub y: f64,
-    /// Range ρ (m).
-    pub range: f64,
-    /// cos φ of the beam.
-    pub cos: f64,
-    /// sin φ of the beam.
-    pub sin: f64,
-}
 
 /// cos/sin of every beam angle `φ_i = angle_min + i·angle_increment`, recomputed only
 /// when the scan geometry (angle_min, angle_increment, number of beams) changes.
 #[derive(Debug, Clone, Default)]
 pub(crate) struct BeamTable {
     key: Option<(u64, u64)>,
-    cos_sin: Vec<(f64, f64)>,
+    cos: Vec<f64>,
+    sin: Vec<f64>,
 }
 
 impl BeamTable {
     /// Makes the table match `scan`'s beam geometry.
     pub fn update(&mut self, scan: &LaserScan<'_>) {
         let key = (scan.angle_min.to_bits(), scan.angle_increment.to_bits());
-        if self.key == Some(key) && self.cos_sin.len() == scan.ranges.len() {
+        if self.key == Some(key) && self.cos.len() == scan.ranges.len() {
             return;
         }
-        self.cos_sin.clear();
-        self.cos_sin.extend((0..scan.ranges.len()).map(|i| {
+        self.cos.clear();
+        self.sin.clear();
+        for i in 0..scan.ranges.len() {
             let (s, c) = libm::sincos(scan.beam_angle(i));
-            (c, s)
-        }));
+            self.cos.push(c);
+            self.sin.push(s);
+        }
         self.key = Some(key);
     }
 }
 
 /// A maximal stretch of consecutive valid beams whose neighbouring points are at most
-/// `max_gap` apart: `points[start..end]`.
+/// `max_gap` apart: beams `start..end`.
 pub(crate) type Run = Range<usize>;
 
-/// The valid points of a scan, cut into runs, with prefix sums of their moments.
+/// The points of a scan, indexed by beam, as parallel slices (structure of arrays: each
+/// per-point loop loads only the fields it uses, and the conversion loop vectorises).
+/// Only beams inside a run are valid points; the entries of the other beams are
+/// meaningless.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Points<'a> {
+    /// x = ρ cos φ (m).
+    pub x: &'a [f64],
+    /// y = ρ sin φ (m).
+    pub y: &'a [f64],
+    /// Range ρ (m).
+    pub range: &'a [f64],
+    /// cos φ of the beam.
+    pub cos: &'a [f64],
+    /// sin φ of the beam.
+    pub sin: &'a [f64],
+}
+
+impl Points<'_> {
+    /// The point of beam `i` as `(x, y)`.
+    #[inline]
+    pub fn xy(&self, i: usize) -> Option<(f64, f64)> {
+        Some((*self.x.get(i)?, *self.y.get(i)?))
+    }
+}
+
+/// The points of a scan (see [`Points`]), cut into runs, with prefix sums of their
+/// moments.
 #[derive(Debug, Clone, Default)]
 pub(crate) struct ScanPoints {
-    /// The points in beam order.
-    pub points: Vec<ScanPoint>,
-    /// Runs of points, in order, tiling `points`.
+    /// x of every beam's point (m).
+    x: Vec<f64>,
+    /// y of every beam's point (m).
+    y: Vec<f64>,
+    /// Every beam's range ρ (m).
+    range: Vec<f64>,
+    /// `gap_sq[i]` for `i ≥ 1`: squared distance between the points of beams `i − 1` and
+    /// `i` (m²); `gap_sq[0]` is not used.
+    gap_sq: Vec<f64>,
+    /// Runs of valid points, in beam order.
     pub runs: Vec<Run>,
-    /// `sums[i]`: moments of points `0..i`, each relative to the first point of its run,
-    /// so `sums[j] − sums[i]` gives the moments of `i..j` within one run in O(1).
-    pub sums: Vec<Moments>,
+    /// `sums[i]` for `i` in `run.start..=run.end` of each run: moments of all the run
+    /// points before beam `i`, each relative to the first point of its run, so
+    /// `sums[j] − sums[i]` gives the moments of `i..j` within one run in O(1).
+    sums: Vec<Moments>,
 }
 
 impl ScanPoints {
-    /// The total-least-squares line `(r, ψ)` of `points[range]`, a stretch inside `run`,
-    /// from the prefix sums in O(1).
-    pub fn line(&self, run: &Run, range: Range<usize>) -> Option<(f64, f64)> {
-        let origin = self.points.get(run.start)?;
-        self.moments(range)?.line((origin.x, origin.y))
+    /// The points, with the beams' cos/sin from `table` (the one they were collected with).
+    pub fn points<'a>(&'a self, table: &'a BeamTable) -> Points<'a> {
+        Points {
+            x: &self.x,
+            y: &self.y,
+            range: &self.range,
+            cos: &table.cos,
+            sin: &table.sin,
+        }
     }
 
-    /// The moments of `points[range]`, a stretch inside one run, in O(1).
+    /// The total-least-squares line of the points `range`, a stretch inside `run`, from
+    /// the prefix sums in O(1).
+    pub fn line(&self, run: &Run, range: Range<usize>) -> Option<NormalLine> {
+        let origin = (*self.x.get(run.start)?, *self.y.get(run.start)?);
+        self.moments(range)?.line(origin)
+    }
+
+    /// The moments of the points `range`, a stretch inside one run, in O(1).
     pub fn moments(&self, range: Range<usize>) -> Option<Moments> {
-        Some(*self.sums.get(range.end)? - *self.sums.get(range.start)?)
+        let sums = *self.sums.get(range.end)? - *self.sums.get(range.start)?;
+        Some(sums.with_count(range.len()))
     }
 }
 
-/// Refills `out` with the valid readings of `scan` (in beam order) as points, cut into
-/// runs at every invalid beam and wherever consecutive points are more than `max_gap`
-/// apart. `table` must be up to date for `scan`.
+/// Refills `out` with the readings of `scan` as points, and cuts the valid ones (in beam
+/// order) into runs at every invalid beam and wherever consecutive points are more than
+/// `max_gap` apart. `table` must be up to date for `scan`.
 pub(crate) fn collect(scan: &LaserScan<'_>, table: &BeamTable, max_gap: f64, out: &mut ScanPoints) {
-    let ScanPoints { points, runs, sums } = out;
-    points.clear();
+    let ScanPoints {
+        x,
+        y,
+        range,
+        gap_sq,
+        runs,
+        sums,
+    } = out;
+    // Every beam, valid or not, in loops without branches, which vectorise. Every slot
+    // is overwritten, so the buffers are only resized (usually a no-op), not cleared.
+    let n = scan.ranges.len().min(table.cos.len()).min(table.sin.len());
+    for v in [&mut *x, &mut *y, &mut *range, &mut *gap_sq] {
+        v.resize(n, 0.0);
+    }
+    let polar = scan.ranges.iter().zip(&table.cos).zip(&table.sin);
+    let cartesian = x.iter_mut().zip(y.iter_mut()).zip(range.iter_mut());
+    for (((x, y), rho), ((&r, &c), &s)) in cartesian.zip(polar) {
+        let r = f64::from(r);
+        *rho = r;
+        *x = r * c;
+        *y = r * s;
+    }
+    // gap_sq[i]: squared distance from the point of beam i − 1 to that of beam i.
+    let (next, previous) = (x.iter().zip(y.iter()).skip(1), x.iter().zip(y.iter()));
+    for (g, ((&x, &y), (&px, &py))) in gap_sq.iter_mut().skip(1).zip(next.zip(previous)) {
+        let (dx, dy) = (x - px, y - py);
+        *g = dx * dx + dy * dy;
+    }
     runs.clear();
-    points.reserve(scan.ranges.len());
     let max_gap_sq = max_gap * max_gap;
-    let mut run_start = 0;
-    // The previous beam's point, if that beam was valid.
-    let mut previous: Option<(f64, f64)> = None;
     let valid = ValidRanges::of(scan);
-    for (&r, &(c, s)) in scan.ranges.iter().zip(&table.cos_sin) {
-        let range = f64::from(r);
-        if !valid.contains(range) {
-            previous = None;
+    // The first beam of the current run, if the previous beam was valid.
+    let mut run_start: Option<usize> = None;
+    for (i, (&r, &gap)) in range.iter().zip(gap_sq.iter()).enumerate() {
+        if !valid.contains(r) {
+            if let Some(start) = run_start.take() {
+                runs.push(start..i);
+            }
             continue;
         }
-        let (x, y) = (range * c, range * s);
-        let joins = previous.is_some_and(|(px, py)| {
-            let (dx, dy) = (x - px, y - py);
-            dx * dx + dy * dy <= max_gap_sq
-        });
-        if !joins {
-            close_run(runs, run_start, points.len());
-            run_start = points.len();
+        match run_start {
+            // Both points are valid, hence finite, and so is `gap`.
+            Some(start) if gap > max_gap_sq => {
+                runs.push(start..i);
+                run_start = Some(i);
+            }
+            Some(_) => {}
+            None => run_start = Some(i),
         }
-        points.push(ScanPoint {
-            x,
-            y,
-            range,
-            cos: c,
-            sin: s,
-        });
-        previous = Some((x, y));
     }
-    close_run(runs, run_start, points.len());
-    prefix_sums(points, runs, sums);
+    if let Some(start) = run_start {
+        runs.push(start..n);
+    }
+    prefix_sums(x, y, runs, sums);
 }
 
-/// Fills `sums` with the prefix sums of the moments of `points`, each point relative to
-/// the first point of its run: `sums[i]` covers `points[..i]`. A loop of its own, over
-/// preallocated slots, keeps the running sum in registers.
-fn prefix_sums(points: &[ScanPoint], runs: &[Run], sums: &mut Vec<Moments>) {
-    sums.clear();
-    sums.resize(points.len() + 1, Moments::default());
+/// Fills `sums` with the prefix sums of the moments of the points in `runs`, each point
+/// relative to the first point of its run: `sums[i]` (for `i` in `run.start..=run.end`)
+/// covers the points before beam `i`; the other slots are left as they were (they are
+/// never read). A loop of its own, over preallocated slots, keeps the running sum in
+/// registers.
+fn prefix_sums(x: &[f64], y: &[f64], runs: &[Run], sums: &mut Vec<Moments>) {
+    sums.resize(x.len() + 1, Moments::default());
     let mut sum = Moments::default();
     for run in runs {
-        let (Some(run_points), Some(slots)) = (
-            points.get(run.clone()),
-            sums.get_mut(run.start + 1..run.end + 1),
+        let (Some(xs), Some(ys), Some(slots)) = (
+            x.get(run.clone()),
+            y.get(run.clone()),
+            sums.get_mut(run.start..run.end + 1),
         ) else {
             continue;
         };
-        let (ox, oy) = run_points.first().map_or((0.0, 0.0), |o| (o.x, o.y));
-        for (slot, p) in slots.iter_mut().zip(run_points) {
-            sum = sum.plus(p.x - ox, p.y - oy);
+        let (ox, oy) = (xs.first().copied(), ys.first().copied());
+        let (ox, oy) = (ox.unwrap_or(0.0), oy.unwrap_or(0.0));
+        let Some((first, slots)) = slots.split_first_mut() else {
+            continue;
+        };
+        *first = sum;
+        for ((slot, &px), &py) in slots.iter_mut().zip(xs).zip(ys) {
+            sum = sum.plus(px - ox, py - oy);
             *slot = sum;
         }
     }
@@ -167,16 +228,60 @@ impl ValidRanges {
     }
 }
 
-/// Squared Euclidean distance between two points (m²).
-#[inline]
-pub(crate) fn squared_distance(a: &ScanPoint, b: &ScanPoint) -> f64 {
-    let (dx, dy) = (a.x - b.x, a.y - b.y);
-    dx * dx + dy * dy
-}
+/// Point sets for the unit tests of the pipeline's steps.
+#[cfg(test)]
+pub(crate) mod testing {
+    use super::{prefix_sums, BeamTable, Points, Run, ScanPoints};
+    use alloc::vec::Vec;
 
-fn close_run(runs: &mut Vec<Run>, start: usize, end: usize) {
-    if end > start {
-        runs.push(start..end);
+    /// Points given one per beam, cut into the given runs, with their prefix sums.
+    pub(crate) struct TestScan {
+        pub scan: ScanPoints,
+        pub table: BeamTable,
+    }
+
+    impl TestScan {
+        /// Points at `(ρ, φ)`, one run.
+        pub fn polar(points: impl IntoIterator<Item = (f64, f64)>) -> Self {
+            let points: Vec<_> = points.into_iter().collect();
+            let n = points.len();
+            Self::new(
+                points
+                    .into_iter()
+                    .map(|(r, phi)| (r * phi.cos(), r * phi.sin(), r, phi.cos(), phi.sin())),
+                core::slice::from_ref(&(0..n)),
+            )
+        }
+
+        /// Points at `(x, y)`, cut into `runs`.
+        pub fn xy(points: impl IntoIterator<Item = (f64, f64)>, runs: &[Run]) -> Self {
+            Self::new(
+                points.into_iter().map(|(x, y)| {
+                    let r = x.hypot(y);
+                    (x, y, r, x / r, y / r)
+                }),
+                runs,
+            )
+        }
+
+        fn new(points: impl Iterator<Item = (f64, f64, f64, f64, f64)>, runs: &[Run]) -> Self {
+            let (mut scan, mut table) = (ScanPoints::default(), BeamTable::default());
+            for (x, y, r, c, s) in points {
+                scan.x.push(x);
+                scan.y.push(y);
+                scan.range.push(r);
+                table.cos.push(c);
+                table.sin.push(s);
+            }
+            scan.runs = runs.to_vec();
+            prefix_sums(&scan.x, &scan.y, &scan.runs, &mut scan.sums);
+            Self { scan, table }
+        }
+
+        /// The points.
+        pub fn points(&self) -> Points<'_> {
+            self.scan.points(&self.table)
+        }
     }
 }
 
@@ -198,14 +303,13 @@ mod tests {
         table.update(&scan);
         let mut out = ScanPoints::default();
         collect(&scan, &table, 0.3, &mut out);
-        assert_eq!(out.points.len(), 6);
-        assert_eq!(out.runs, [0..2, 2..4, 4..6]);
-        assert_eq!(out.sums.len(), 7);
-        let p = out.points[5];
-        assert!((p.x - 3.0 * 0.06_f64.cos()).abs() < 1e-6);
-        assert!((p.y - 3.0 * 0.06_f64.sin()).abs() < 1e-6);
+        assert_eq!(out.runs, [0..2, 3..5, 5..7]);
+        assert_eq!(out.sums.len(), 9);
+        let (x, y) = out.points(&table).xy(6).unwrap();
+        assert!((x - 3.0 * 0.06_f64.cos()).abs() < 1e-6);
+        assert!((y - 3.0 * 0.06_f64.sin()).abs() < 1e-6);
         // The last run is two points at 3 m, 0.01 rad apart: its line from the sums.
-        let (r, psi) = out.line(&out.runs[2].clone(), 4..6).unwrap();
+        let NormalLine { r, psi, .. } = out.line(&out.runs[2].clone(), 5..7).unwrap();
         assert!((psi - 0.055).abs() < 1e-6 && (r - 3.0 * 0.005_f64.cos()).abs() < 1e-6);
     }
 }

@@ -1,7 +1,8 @@
 //! The split step of split-and-merge (iterative end-point fit): a run of points is cut at
 //! the point farthest from the chord between its end points until every piece is straight.
 
-use super::points::{Run, ScanPoint, ScanPoints};
+use super::moments::NormalLine;
+use super::points::{Points, Run, ScanPoints};
 use alloc::vec::Vec;
 use core::ops::Range;
 
@@ -14,6 +15,7 @@ use core::ops::Range;
 /// `stack` is scratch space (an explicit stack instead of recursion).
 pub(crate) fn split_runs(
     scan: &ScanPoints,
+    points: &Points<'_>,
     split_distance: f64,
     min_points: usize,
     stack: &mut Vec<Run>,
@@ -26,12 +28,9 @@ pub(crate) fn split_runs(
             if range.len() < min_points {
                 continue;
             }
-            let Some(seg) = scan.points.get(range.clone()) else {
-                continue;
-            };
-            match farthest_from_chord(seg) {
+            match farthest_from_chord(points, range.clone()) {
                 Some((k, d)) if d > split_distance => {
-                    let k = refine_split(scan, run, range.clone(), range.start + k, split_distance);
+                    let k = refine_split(scan, points, run, range.clone(), k, split_distance);
                     // Right piece first so the left one is popped (and emitted) first.
                     stack.push(k + 1..range.end);
                     stack.push(range.start..k);
@@ -50,6 +49,7 @@ pub(crate) fn split_runs(
 /// points.
 fn refine_split(
     scan: &ScanPoints,
+    points: &Points<'_>,
     run: &Run,
     range: Range<usize>,
     k: usize,
@@ -71,10 +71,9 @@ fn refine_split(
     ) else {
         return k;
     };
-    let (left, right) = (normal_form(left), normal_form(right));
-    let nearer = |i: usize, to: (f64, f64, f64), other: (f64, f64, f64)| {
-        scan.points
-            .get(i)
+    let nearer = |i: usize, to: NormalLine, other: NormalLine| {
+        points
+            .xy(i)
             .is_some_and(|p| distance(p, to) < distance(p, other))
     };
     let lowest = range.start + (k - range.start).div_ceil(2);
@@ -95,105 +94,92 @@ fn refine_split(
 /// below this fraction of `split_distance²` (rms below a third of it).
 const STRAIGHT_FRACTION: f64 = 1.0 / 9.0;
 
-/// `(r, ψ)` as `(r, cos ψ, sin ψ)`.
-fn normal_form((r, psi): (f64, f64)) -> (f64, f64, f64) {
-    let (s, c) = libm::sincos(psi);
-    (r, c, s)
+/// Unsigned distance of a point from a line.
+fn distance((x, y): (f64, f64), line: NormalLine) -> f64 {
+    libm::fabs(x * line.cos + y * line.sin - line.r)
 }
 
-/// Unsigned distance of a point from the line `(r, cos ψ, sin ψ)`.
-fn distance(p: &ScanPoint, (r, c, s): (f64, f64, f64)) -> f64 {
-    libm::fabs(p.x * c + p.y * s - r)
-}
-
-/// Index (within `seg`) and distance of the point farthest from the chord through the
-/// first and last points. For coincident end points the distance is measured from the
-/// first point. `None` for fewer than three points.
-fn farthest_from_chord(seg: &[ScanPoint]) -> Option<(usize, f64)> {
-    let (first, last) = (seg.first()?, seg.last()?);
-    if seg.len() < 3 {
+/// Beam and distance of the point of `range` farthest from the chord through its first
+/// and last points. For coincident end points the distance is measured from the first
+/// point. `None` for fewer than three points.
+fn farthest_from_chord(points: &Points<'_>, range: Range<usize>) -> Option<(usize, f64)> {
+    if range.len() < 3 {
         return None;
     }
-    let (dx, dy) = (last.x - first.x, last.y - first.y);
+    let (xs, ys) = (points.x.get(range.clone())?, points.y.get(range.clone())?);
+    let (fx, fy, lx, ly) = (*xs.first()?, *ys.first()?, *xs.last()?, *ys.last()?);
+    let (dx, dy) = (lx - fx, ly - fy);
     let len = libm::sqrt(dx * dx + dy * dy);
     let mut best = (0, 0.0);
     if len > 0.0 {
         let (nx, ny) = (-dy / len, dx / len);
-        for (i, p) in seg.iter().enumerate() {
-            let d = libm::fabs(nx * (p.x - first.x) + ny * (p.y - first.y));
+        let distance = |x: f64, y: f64| libm::fabs(nx * (x - fx) + ny * (y - fy));
+        // Two points per iteration: half the loop overhead, and room for the compiler to
+        // interleave the two distances.
+        let (x_pairs, y_pairs) = (xs.chunks_exact(2), ys.chunks_exact(2));
+        let last = x_pairs.remainder().first().zip(y_pairs.remainder().first());
+        for (pair, (x, y)) in x_pairs.zip(y_pairs).enumerate() {
+            let (Some(&[x0, x1]), Some(&[y0, y1])) = (x.first_chunk(), y.first_chunk()) else {
+                continue;
+            };
+            let (d0, d1) = (distance(x0, y0), distance(x1, y1));
+            if d0 > best.1 {
+                best = (2 * pair, d0);
+            }
+            if d1 > best.1 {
+                best = (2 * pair + 1, d1);
+            }
+        }
+        if let Some((&x, &y)) = last {
+            let d = distance(x, y);
             if d > best.1 {
-                best = (i, d);
+                best = (xs.len() - 1, d);
             }
         }
     } else {
-        for (i, p) in seg.iter().enumerate() {
-            let d = libm::hypot(p.x - first.x, p.y - first.y);
+        for (i, (&x, &y)) in xs.iter().zip(ys).enumerate() {
+            let d = libm::hypot(x - fx, y - fy);
             if d > best.1 {
                 best = (i, d);
             }
         }
     }
-    Some(best)
+    Some((range.start + best.0, best.1))
 }
 
 #[cfg(test)]
 mod tests {
+    use super::super::points::testing::TestScan;
     use super::*;
-    use crate::extract::moments::Moments;
-    use alloc::vec;
-
-    fn pt(x: f64, y: f64) -> ScanPoint {
-        let range = libm::hypot(x, y);
-        ScanPoint {
-            x,
-            y,
-            range,
-            cos: x / range,
-            sin: y / range,
-        }
-    }
-
-    /// Points cut into the given runs, with their prefix sums.
-    fn scan_points(points: Vec<ScanPoint>, runs: &[Run]) -> ScanPoints {
-        let mut sums = vec![Moments::default()];
-        for run in runs {
-            let o = points[run.start];
-            for p in &points[run.clone()] {
-                let last = *sums.last().unwrap();
-                sums.push(last.plus(p.x - o.x, p.y - o.y));
-            }
-        }
-        ScanPoints {
-            points,
-            runs: runs.to_vec(),
-            sums,
-        }
-    }
 
     #[test]
     fn splits_a_corner_and_keeps_order() {
         // An L: 10 points along the wall y = 2 (x from 3 down to 0.3), then 10 along the
         // wall x = −0.3 (y from 2 down to −0.25).
-        let mut points: Vec<ScanPoint> = (0..10).map(|i| pt(3.0 - 0.3 * i as f64, 2.0)).collect();
-        points.extend((0..10).map(|i| pt(-0.3, 2.0 - 0.25 * i as f64)));
-        let scan = scan_points(points.clone(), &[Run { start: 0, end: 20 }]);
+        let mut points: Vec<(f64, f64)> = (0..10).map(|i| (3.0 - 0.3 * i as f64, 2.0)).collect();
+        points.extend((0..10).map(|i| (-0.3, 2.0 - 0.25 * i as f64)));
+        let test = TestScan::xy(points, core::slice::from_ref(&(0..20)));
+        let points = test.points();
         let (mut stack, mut segments) = (Vec::new(), Vec::new());
-        split_runs(&scan, 0.05, 3, &mut stack, &mut segments);
+        split_runs(&test.scan, &points, 0.05, 3, &mut stack, &mut segments);
         assert_eq!(segments.len(), 2, "{segments:?}");
         assert!(segments[0].end <= segments[1].start);
         for s in &segments {
-            assert!(farthest_from_chord(&points[s.clone()]).unwrap().1 <= 0.05);
+            assert!(farthest_from_chord(&points, s.clone()).unwrap().1 <= 0.05);
         }
     }
 
     #[test]
     fn short_and_degenerate_runs() {
-        let points = vec![pt(1.0, 0.0), pt(1.0, 0.0), pt(1.0, 0.0), pt(2.0, 0.0)];
-        let scan = scan_points(points.clone(), &[0..3, 3..4]);
+        let test = TestScan::xy(
+            [(1.0, 0.0), (1.0, 0.0), (1.0, 0.0), (2.0, 0.0)],
+            &[0..3, 3..4],
+        );
+        let points = test.points();
         let (mut stack, mut segments) = (Vec::new(), Vec::new());
-        split_runs(&scan, 0.05, 2, &mut stack, &mut segments);
+        split_runs(&test.scan, &points, 0.05, 2, &mut stack, &mut segments);
         assert_eq!(segments.len(), 1);
         assert_eq!(segments[0], 0..3);
-        assert_eq!(farthest_from_chord(&points[..2]), None);
+        assert_eq!(farthest_from_chord(&points, 0..2), None);
     }
 }

@@ -1,0 +1,51 @@
+//! The `[devices]` section of the configuration: how `ekf live` talks to the robot's
+//! devices and turns their raw values into ROS messages.
+
+use serde::{Deserialize, Serialize};
+
+/// Serial devices of the paper's robot (DESIGN.md §6).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct DevicesConfig {
+    /// The laser's frame id in the recorded scans and `/tf_static`.
+    pub laser_frame: String,
+    /// Laser baud rate after start-up: 38400, or 500000 (falls back to 38400 where the
+    /// adapter cannot).
+    pub laser_baud: u32,
+    /// Laser scanning angle (degrees): 180 or 100.
+    pub laser_angle_deg: u16,
+    /// Laser angular resolution (degrees): 1, 0.5 or 0.25 (0.25 only with 100°).
+    pub laser_resolution_deg: f64,
+    /// MODBUS unit id of the base controller.
+    pub base_unit_id: u8,
+    /// Base controller baud rate.
+    pub base_baud: u32,
+    /// Encoder ticks per wheel revolution (after quadrature decoding).
+    pub ticks_per_revolution: f64,
+    /// Polls of the base controller per second (the filter rate).
+    pub poll_rate_hz: f64,
+    /// GPS baud rate.
+    pub gps_baud: u32,
+    /// The GPS antenna's frame id in the recorded fixes.
+    pub gps_frame: String,
+    /// Seconds without usable data before a device counts as silent.
+    pub timeout_s: f64,
+}
+
+impl Default for DevicesConfig {
+    fn default() -> Self {
+        Self {
+            laser_frame: "laser".into(),
+            laser_baud: 38_400,
+            laser_angle_deg: 180,
+            laser_resolution_deg: 0.5,
+            base_unit_id: 1,
+            base_baud: 38_400,
+            ticks_per_revolution: 500.0,
+            poll_rate_hz: 10.0,
+            gps_baud: 4800,
+            gps_frame: "gps".into(),
+            timeout_s: 2.0,
+        }
+    }
+}

@@ -1,0 +1,82 @@
+//! A serial line as the drivers see it: bytes both ways with a short read timeout, and a
+//! settable baud rate. [`SerialLink`] is the real port (`serialport`).
+
+use super::DeviceError;
+use std::io::{self, Read, Write};
+use std::time::Duration;
+
+/// How long one read waits before returning nothing; drivers loop on it with their own
+/// deadlines, so it only bounds how late a deadline or a stop request is noticed.
+pub const READ_SLICE: Duration = Duration::from_millis(20);
+
+/// A byte link to a device.
+pub trait Link: Send {
+    /// Reads what is there, waiting at most [`READ_SLICE`]; `Ok(0)` when nothing came.
+    fn read_some(&mut self, buf: &mut [u8]) -> io::Result<usize>;
+    /// Writes all of `bytes`.
+    fn write_all_bytes(&mut self, bytes: &[u8]) -> io::Result<()>;
+    /// Changes the host side's baud rate.
+    fn set_baud_rate(&mut self, bps: u32) -> io::Result<()>;
+    /// Discards bytes received but not read.
+    fn clear_input(&mut self) -> io::Result<()>;
+    /// The port's path, for messages.
+    fn name(&self) -> &str;
+}
+
+/// A serial port opened by path (8N1, no flow control).
+pub struct SerialLink {
+    port: Box<dyn serialport::SerialPort>,
+    name: String,
+}
+
+impl SerialLink {
+    /// Opens `path` at `bps` for `device` (named in errors).
+    pub fn open(device: &'static str, path: &str, bps: u32) -> Result<Self, DeviceError> {
+        let port = serialport::new(path, bps)
+            .timeout(READ_SLICE)
+            .open()
+            .map_err(|e| DeviceError::Open {
+                device,
+                port: path.into(),
+                message: e.to_string(),
+            })?;
+        Ok(Self {
+            port,
+            name: path.into(),
+        })
+    }
+}
+
+impl Link for SerialLink {
+    fn read_some(&mut self, buf: &mut [u8]) -> io::Result<usize> {
+        match self.port.read(buf) {
+            // A tty read of 0 bytes after poll said "readable" is a hang-up.
+            Ok(0) => Err(io::Error::new(
+                io::ErrorKind::UnexpectedEof,
+                "the line hung up",
+            )),
+            Ok(n) => Ok(n),
+            Err(e) if e.kind() == io::ErrorKind::TimedOut => Ok(0),
+            Err(e) => Err(e),
+        }
+    }
+
+    fn write_all_bytes(&mut self, bytes: &[u8]) -> io::Result<()> {
+        self.port.write_all(bytes)?;
+        self.port.flush()
+    }
+
+    fn set_baud_rate(&mut self, bps: u32) -> io::Result<()> {
+        self.port.set_baud_rate(bps).map_err(io::Error::from)
+    }
+
+    fn clear_input(&mut self) -> io::Result<()> {
+        self.port
+            .clear(serialport::ClearBuffer::Input)
+            .map_err(io::Error::from)
+    }
+
+    fn name(&self) -> &str {
+        &self.name
+    }
+}

@@ -1,0 +1,324 @@
+//! The host side of an LMS 2xx: find the scanner's baud rate (9600 after power-up), switch
+//! to the configured rate (38400, or 500k where the adapter allows), set angle and
+//! resolution, start continuous output, read scans, stop output on exit.
+
+use super::measured::MeasuredValues;
+use super::parser::{DiscardKind, Event, ParserStats, TelegramParser};
+use super::telegram::{
+    BaudRate, Mode, Telegram, Variant, REPLY_MEASURED, REPLY_MODE, REPLY_VARIANT,
+};
+use crate::devices::{DeviceError, Link};
+use std::time::{Duration, Instant};
+
+const DEVICE: &str = "laser";
+
+/// How the scanner is set up.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SickConfig {
+    /// The rate to run at: 38400, or 500000 (falls back to 38400 if the adapter cannot).
+    pub baud: BaudRate,
+    /// Angular range and resolution.
+    pub variant: Variant,
+    /// How long to wait for the reply to a request.
+    pub reply_timeout: Duration,
+    /// How long without a valid scan before the scanner counts as silent.
+    pub scan_timeout: Duration,
+}
+
+impl Default for SickConfig {
+    fn default() -> Self {
+        Self {
+            baud: BaudRate::B38400,
+            variant: Variant::DEFAULT,
+            reply_timeout: Duration::from_millis(500),
+            scan_timeout: Duration::from_secs(2),
+        }
+    }
+}
+
+/// What the driver has counted, for diagnostics.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
+pub struct SickCounters {
+    /// The stream parser's counts (telegrams, garbage bytes, bad CRCs, truncations).
+    #[serde(flatten)]
+    pub parser: ParserStats,
+    /// Scans delivered.
+    pub scans: u64,
+    /// `B0` telegrams with a valid CRC that could not be decoded (units, counts).
+    pub bad_scans: u64,
+    /// NAKs received.
+    pub naks: u64,
+}
+
+/// A connected, continuously scanning LMS 2xx.
+pub struct SickLaser<L: Link> {
+    link: L,
+    parser: TelegramParser,
+    config: SickConfig,
+    baud: BaudRate,
+    counters: SickCounters,
+    last_fault: Option<String>,
+}
+
+impl<L: Link> SickLaser<L> {
+    /// Finds the scanner, configures it and starts continuous output.
+    pub fn connect(link: L, config: SickConfig) -> Result<Self, DeviceError> {
+        let mut laser = Self {
+            link,
+            parser: TelegramParser::new(),
+            config,
+            baud: BaudRate::B9600,
+            counters: SickCounters::default(),
+            last_fault: None,
+        };
+        laser.find_baud_rate()?;
+        laser.switch_baud_rate()?;
+        laser.set_variant()?;
+        laser.set_mode(Mode::Continuous)?;
+        Ok(laser)
+    }
+
+    /// The baud rate in use.
+    pub fn baud_rate(&self) -> BaudRate {
+        self.baud
+    }
+
+    /// The configured variant (angle and resolution).
+    pub fn variant(&self) -> Variant {
+        self.config.variant
+    }
+
+    /// Counts so far.
+    pub fn counters(&self) -> SickCounters {
+        SickCounters {
+            parser: self.parser.stats(),
+            ..self.counters
+        }
+    }
+
+    /// The most recent discarded input or bad scan, described.
+    pub fn last_fault(&self) -> Option<&str> {
+        self.last_fault.as_deref()
+    }
+
+    /// The port's path.
+    pub fn port(&self) -> &str {
+        self.link.name()
+    }
+
+    /// The next valid scan. Garbage, bad CRCs, truncated telegrams and undecodable scans
+    /// are counted and skipped; no valid scan within the scan timeout is an error.
+    pub fn next_scan(&mut self) -> Result<MeasuredValues, DeviceError> {
+        let deadline = Instant::now() + self.config.scan_timeout;
+        loop {
+            while let Some(event) = self.parser.next_event() {
+                if let Some(scan) = self.scan_event(event) {
+                    return Ok(scan);
+                }
+            }
+            if Instant::now() >= deadline {
+                for event in self.parser.finish() {
+                    self.note(&event);
+                }
+                return Err(self.silent(
+                    self.config.scan_timeout,
+                    "measured values (B0 telegrams) in continuous output".into(),
+                ));
+            }
+            self.read()?;
+        }
+    }
+
+    /// Stops continuous output (`20 25`), as on exit, and returns the link.
+    pub fn stop(mut self) -> Result<L, DeviceError> {
+        self.set_mode(Mode::Stop)?;
+        Ok(self.link)
+    }
+
+    fn scan_event(&mut self, event: Event) -> Option<MeasuredValues> {
+        let Event::Telegram(t) = &event else {
+            self.note(&event);
+            return None;
+        };
+        if t.command != REPLY_MEASURED {
+            return None;
+        }
+        let decoded = MeasuredValues::decode(t.payload())
+            .and_then(|m| m.check_count(self.config.variant).map(|()| m));
+        match decoded {
+            Ok(m) => {
+                self.counters.scans += 1;
+                Some(m)
+            }
+            Err(e) => {
+                self.counters.bad_scans += 1;
+                self.last_fault = Some(e.to_string());
+                None
+            }
+        }
+    }
+
+    fn note(&mut self, event: &Event) {
+        match event {
+            Event::Discarded(d) => self.last_fault = Some(d.to_string()),
+            Event::Nak => self.counters.naks += 1,
+            Event::Telegram(_) | Event::Ack => {}
+        }
+    }
+
+    /// Tries the rates in [`BaudRate::SEARCH_ORDER`] until the scanner answers a stop
+    /// request; stopping first also quiets a scanner still streaming from a past run.
+    fn find_baud_rate(&mut self) -> Result<(), DeviceError> {
+        for baud in BaudRate::SEARCH_ORDER {
+            self.set_host_baud(baud)?;
+            match self.set_mode(Mode::Stop) {
+                Ok(()) => return Ok(()),
+                Err(DeviceError::Silent { .. }) => continue,
+                Err(e) => return Err(e),
+            }
+        }
+        Err(self.silent(
+            self.config.reply_timeout * BaudRate::SEARCH_ORDER.len() as u32,
+            "an ACK (06) and an A0 reply to the stop request 02 00 02 00 20 25 at 9600, \
+             38400, 500000 or 19200 baud: is the scanner powered and connected?"
+                .into(),
+        ))
+    }
+
+    /// Switches to the configured rate; 500k falls back to 38400 when the adapter
+    /// refuses that rate.
+    fn switch_baud_rate(&mut self) -> Result<(), DeviceError> {
+        let mut target = self.config.baud;
+        if target == self.baud {
+            return Ok(());
+        }
+        if self.link.set_baud_rate(target.bits_per_second()).is_err() {
+            self.last_fault = Some(format!(
+                "the adapter cannot run at {} baud; using 38400",
+                target.bits_per_second()
+            ));
+            target = BaudRate::B38400;
+        }
+        self.set_host_baud(self.baud)?;
+        self.set_mode(Mode::Baud(target))?;
+        self.set_host_baud(target)
+    }
+
+    fn set_variant(&mut self) -> Result<(), DeviceError> {
+        let v = self.config.variant;
+        let reply = self.transact(&v.request(), REPLY_VARIANT)?;
+        let payload = reply.payload();
+        let echoed = payload.get(1..).and_then(Variant::from_bytes);
+        if payload.first() != Some(&1) || echoed != Some(v) {
+            return Err(self.refused(format!(
+                "refused angle {}° at resolution {}° (3B reply {:02x?})",
+                v.angle_deg,
+                f64::from(v.resolution_cdeg) / 100.0,
+                reply.data
+            )));
+        }
+        Ok(())
+    }
+
+    fn set_mode(&mut self, mode: Mode) -> Result<(), DeviceError> {
+        let reply = self.transact(&mode.request(), REPLY_MODE)?;
+        match reply.payload().first() {
+            Some(0) => Ok(()),
+            other => Err(self.refused(format!(
+                "mode change 20 {:02x} failed (A0 status {other:02x?}, expected 00)",
+                mode.code()
+            ))),
+        }
+    }
+
+    /// Sends `request` and waits for the reply `reply_command`, skipping other telegrams
+    /// (scans still in flight). A NAK is a refusal.
+    fn transact(&mut self, request: &Telegram, reply_command: u8) -> Result<Telegram, DeviceError> {
+        let bytes = request.encode();
+        self.link
+            .write_all_bytes(&bytes)
+            .map_err(|source| self.io("writing a request", source))?;
+        let deadline = Instant::now() + self.config.reply_timeout;
+        loop {
+            while let Some(event) = self.parser.next_event() {
+                match event {
+                    Event::Telegram(t) if t.command == reply_command => return Ok(t),
+                    Event::Nak => {
+                        self.counters.naks += 1;
+                        return Err(self.refused(format!("NAK (15) to the request {bytes:02x?}")));
+                    }
+                    other => self.note(&other),
+                }
+            }
+            if Instant::now() >= deadline {
+                for event in self.parser.finish() {
+                    self.note(&event);
+                }
+                return Err(self.silent(
+                    self.config.reply_timeout,
+                    format!(
+                        "an {reply_command:02X} reply to {:02x?} at {} baud",
+                        bytes,
+                        self.baud.bits_per_second()
+                    ),
+                ));
+            }
+            self.read()?;
+        }
+    }
+
+    fn set_host_baud(&mut self, baud: BaudRate) -> Result<(), DeviceError> {
+        self.link
+            .set_baud_rate(baud.bits_per_second())
+            .map_err(|source| self.io("setting the baud rate", source))?;
+        self.baud = baud;
+        // Bytes received at another rate are noise; start clean.
+        self.link
+            .clear_input()
+            .map_err(|source| self.io("clearing the input", source))?;
+        for event in self.parser.finish() {
+            if let Event::Discarded(d) = event {
+                if d.kind == DiscardKind::Garbage {
+                    self.last_fault = Some(d.to_string());
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn read(&mut self) -> Result<(), DeviceError> {
+        let mut buf = [0u8; 1024];
+        let n = self
+            .link
+            .read_some(&mut buf)
+            .map_err(|source| self.io("reading", source))?;
+        self.parser.push(&buf[..n]);
+        Ok(())
+    }
+
+    fn io(&self, during: &'static str, source: std::io::Error) -> DeviceError {
+        DeviceError::Io {
+            device: DEVICE,
+            port: self.link.name().into(),
+            during,
+            source,
+        }
+    }
+
+    fn silent(&self, waited: Duration, expected: String) -> DeviceError {
+        DeviceError::Silent {
+            device: DEVICE,
+            port: self.link.name().into(),
+            waited,
+            expected,
+        }
+    }
+
+    fn refused(&self, message: String) -> DeviceError {
+        DeviceError::Refused {
+            device: DEVICE,
+            port: self.link.name().into(),
+            message,
+        }
+    }
+}

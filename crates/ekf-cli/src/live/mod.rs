@@ -1,0 +1,512 @@
+//! `ekf live`: the filter on the robot's serial devices. Readings become the ROS 2
+//! messages of DESIGN.md §5, are recorded (with `/tf_static` for the laser mount and the
+//! estimates) and fed to the same filter loop as `ekf replay`, so a replay of the
+//! recording gives the same poses bit for bit. Devices that fail are reported and
+//! reconnected with backoff; a device silent at start-up is an error naming its port.
+
+pub mod messages;
+mod workers;
+
+use crate::config::{Config, MotionSource};
+use crate::devices::modbus_base::{BaseConfig, EncoderTracker};
+use crate::devices::sick::{BaudRate, RangeUnit, SickConfig, Variant};
+use crate::devices::DeviceError;
+use crate::replay::{Mode, Preamble, ReplayError, ReplayOptions, ReplaySummary, Run};
+use crate::ros2::builtin_interfaces::Time;
+use crate::ros2::diagnostic_msgs::{DiagnosticArray, DiagnosticStatus, KeyValue};
+use crate::ros2::std_msgs::Header;
+use ekf_core::Pose2;
+use messages::{RecordError, Recorder};
+use nalgebra::Matrix3;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::{self, RecvTimeoutError};
+use std::sync::Arc;
+use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
+use workers::{DeviceCounters, Reading};
+
+/// Topic of the device diagnostics in a recording.
+pub const DEVICE_DIAGNOSTICS_TOPIC: &str = "/diagnostics";
+/// Topic of the GPS fixes in a recording.
+pub const FIX_TOPIC: &str = "/fix";
+
+/// What to run on and where to write.
+#[derive(Debug, Clone)]
+pub struct LiveOptions {
+    /// The laser's port.
+    pub laser: String,
+    /// The base controller's port.
+    pub base: String,
+    /// The GPS's port, if there is one.
+    pub gps: Option<String>,
+    /// Record the raw readings and the estimates to this MCAP.
+    pub record: Option<PathBuf>,
+    /// A line map (JSON); `None`: built from the first scan.
+    pub map: Option<PathBuf>,
+    /// Which sensors the filter uses.
+    pub mode: Mode,
+}
+
+/// What the run reports as it goes.
+#[derive(Debug, Clone, PartialEq)]
+pub enum LiveEvent {
+    /// The estimate after a motion step.
+    Pose {
+        /// Time (ns since the Unix epoch).
+        t_ns: u64,
+        /// The pose.
+        pose: Pose2<f64>,
+        /// Its covariance.
+        covariance: Matrix3<f64>,
+    },
+    /// A device connected, failed or came back.
+    Device {
+        /// `laser`, `base` or `gps`.
+        device: &'static str,
+        /// 0 OK, 1 warning.
+        level: u8,
+        /// What happened.
+        text: String,
+    },
+}
+
+/// Counts of everything that happened, per device and in the filter.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct LiveSummary {
+    /// The filter's summary (as `ekf replay` reports it for the recording).
+    pub filter: ReplaySummary,
+    /// Each device's counters since its last (re)connection.
+    pub devices: BTreeMap<&'static str, serde_json::Value>,
+    /// Reconnections per device.
+    pub reconnects: BTreeMap<&'static str, u64>,
+    /// Base reads that repeated the previous sample.
+    pub base_repeated_samples: u64,
+    /// Base samples whose replies were lost (counter jumps).
+    pub base_missed_samples: u64,
+    /// Compass bearings out of range (not fused).
+    pub compass_invalid: u64,
+    /// GPS fixes recorded.
+    pub gps_fixes: u64,
+    /// The recording, if any.
+    pub recording: Option<String>,
+}
+
+/// Why a live run failed.
+#[derive(Debug, thiserror::Error)]
+pub enum LiveError {
+    /// A device could not be brought up.
+    #[error(transparent)]
+    Device(#[from] DeviceError),
+    /// The configuration does not suit live mode.
+    #[error("{0}")]
+    Config(String),
+    /// The filter or its outputs failed.
+    #[error(transparent)]
+    Filter(#[from] ReplayError),
+    /// A message could not be recorded.
+    #[error(transparent)]
+    Record(#[from] RecordError),
+}
+
+/// The result of a run: the summary, and the error that ended it early, if any (the
+/// recording is finished either way).
+#[derive(Debug)]
+pub struct LiveOutcome {
+    /// Counts.
+    pub summary: LiveSummary,
+    /// Why the run ended early.
+    pub failure: Option<LiveError>,
+}
+
+/// Nanoseconds since the Unix epoch from a monotonic clock, strictly increasing per
+/// call (so messages of different devices never share a stamp).
+struct Clock {
+    epoch_ns: u64,
+    started: Instant,
+    last: u64,
+}
+
+impl Clock {
+    fn new() -> Self {
+        let epoch_ns = SystemTime::now()
+            .duration_since(UNIX_EPOCH)
+            .map_or(0, |d| d.as_nanos() as u64);
+        Self {
+            epoch_ns,
+            started: Instant::now(),
+            last: 0,
+        }
+    }
+
+    fn now(&mut self) -> u64 {
+        let t = self.epoch_ns + self.started.elapsed().as_nanos() as u64;
+        self.last = t.max(self.last + 1);
+        self.last
+    }
+}
+
+/// The laser variant the configuration asks for.
+fn variant(config: &Config) -> Result<Variant, LiveError> {
+    let d = &config.devices;
+    let v = Variant {
+        angle_deg: d.laser_angle_deg,
+        resolution_cdeg: (d.laser_resolution_deg * 100.0).round() as u16,
+    };
+    if v.is_supported() {
+        Ok(v)
+    } else {
+        Err(LiveError::Config(format!(
+            "devices.laser_angle_deg = {} with devices.laser_resolution_deg = {}: an LMS 2xx scans 180° at 1° or 0.5°, or 100° at 1°, 0.5° or 0.25°",
+            d.laser_angle_deg, d.laser_resolution_deg
+        )))
+    }
+}
+
+/// Runs until `stop` is set (SIGINT/SIGTERM) or a device fails at start-up; `on_event`
+/// receives poses and device news.
+pub fn run(
+    config: &Config,
+    options: &LiveOptions,
+    stop: Arc<AtomicBool>,
+    on_event: &mut dyn FnMut(LiveEvent),
+) -> Result<LiveOutcome, LiveError> {
+    let started = Instant::now();
+    if config.motion.source == MotionSource::Odom {
+        return Err(LiveError::Config(
+            "motion.source = \"odom\": live mode drives the filter from the wheel encoders; use \"auto\" or \"joint_states\"".into(),
+        ));
+    }
+    let d = &config.devices;
+    let variant = variant(config)?;
+    let laser_baud = BaudRate::from_bits_per_second(d.laser_baud)
+        .filter(|b| matches!(b, BaudRate::B38400 | BaudRate::B500000))
+        .ok_or_else(|| {
+            LiveError::Config(format!(
+                "devices.laser_baud = {}: expected 38400 or 500000",
+                d.laser_baud
+            ))
+        })?;
+    if !(d.timeout_s > 0.0 && d.poll_rate_hz > 0.0 && d.ticks_per_revolution > 0.0) {
+        return Err(LiveError::Config(
+            "devices.timeout_s, devices.poll_rate_hz and devices.ticks_per_revolution must be > 0"
+                .into(),
+        ));
+    }
+    let timeout = Duration::from_secs_f64(d.timeout_s);
+
+    // Devices first: a silent device ends the run before anything is written.
+    let (tx, rx) = mpsc::channel();
+    let worker_stop = Arc::new(AtomicBool::new(false));
+    let mut threads = vec![
+        workers::spawn::<workers::Laser>(
+            options.laser.clone(),
+            SickConfig {
+                baud: laser_baud,
+                variant,
+                scan_timeout: timeout,
+                ..SickConfig::default()
+            },
+            tx.clone(),
+            Arc::clone(&worker_stop),
+        ),
+        workers::spawn::<workers::Base>(
+            options.base.clone(),
+            workers::BaseSettings {
+                client: BaseConfig {
+                    unit_id: d.base_unit_id,
+                    silence_timeout: timeout,
+                    ..BaseConfig::default()
+                },
+                baud: d.base_baud,
+                period: Duration::from_secs_f64(1.0 / d.poll_rate_hz),
+            },
+            tx.clone(),
+            Arc::clone(&worker_stop),
+        ),
+    ];
+    if let Some(gps) = &options.gps {
+        threads.push(workers::spawn::<workers::Gps>(
+            gps.clone(),
+            workers::GpsSettings {
+                baud: d.gps_baud,
+                timeout,
+            },
+            tx.clone(),
+            Arc::clone(&worker_stop),
+        ));
+    }
+    drop(tx);
+    let shutdown = |threads: Vec<std::thread::JoinHandle<()>>| {
+        worker_stop.store(true, Ordering::Relaxed);
+        for t in threads {
+            let _ = t.join();
+        }
+    };
+
+    let mut live = Live::new(config, options, variant)?;
+    let mut connected = 0;
+    let expected = threads.len();
+    let mut failure = None;
+    let mut last_diagnostics = Instant::now();
+    while !stop.load(Ordering::Relaxed) {
+        let reading = match rx.recv_timeout(Duration::from_millis(50)) {
+            Ok(r) => r,
+            Err(RecvTimeoutError::Timeout) => continue,
+            Err(RecvTimeoutError::Disconnected) => break,
+        };
+        let step = match reading {
+            Reading::Failed(e) => {
+                // Only a start-up failure gets here (later ones are retried); the
+                // recording is finished when `live` is dropped.
+                shutdown(threads);
+                return Err(e.into());
+            }
+            Reading::Status {
+                device,
+                level,
+                text,
+            } => {
+                if level == workers::OK {
+                    connected += 1;
+                    if connected > expected {
+                        *live.summary.reconnects.entry(device).or_default() += 1;
+                    }
+                }
+                on_event(LiveEvent::Device {
+                    device,
+                    level,
+                    text: text.clone(),
+                });
+                live.device_status(device, level, &text)
+            }
+            other => live.reading(other, on_event),
+        };
+        if let Err(e) = step {
+            failure = Some(e);
+            break;
+        }
+        if last_diagnostics.elapsed() >= Duration::from_secs(1) {
+            last_diagnostics = Instant::now();
+            if let Err(e) = live.counters_diagnostics() {
+                failure = Some(e);
+                break;
+            }
+        }
+    }
+    shutdown(threads);
+    let _ = live.counters_diagnostics();
+    live.finish(started, failure)
+}
+
+/// The main loop's state.
+struct Live<'a> {
+    config: &'a Config,
+    run: Run<'a>,
+    recorder: Recorder,
+    clock: Clock,
+    tracker: EncoderTracker,
+    variant: Variant,
+    unit: RangeUnit,
+    counters: BTreeMap<&'static str, DeviceCounters>,
+    summary: LiveSummary,
+}
+
+impl<'a> Live<'a> {
+    fn new(config: &'a Config, options: &LiveOptions, variant: Variant) -> Result<Self, LiveError> {
+        let mut clock = Clock::new();
+        let t0 = clock.now();
+        let tf = messages::laser_transform(config, t0);
+        let preamble = Preamble {
+            scan_frame: Some(config.devices.laser_frame.clone()),
+            transforms: tf.transforms.clone(),
+            first_reference: None,
+        };
+        let replay_options = ReplayOptions {
+            mode: options.mode,
+            map: options.map.clone(),
+            init_from_truth: false,
+            out_mcap: options.record.clone(),
+            tum: None,
+            keep_trajectories: false,
+        };
+        let name = options
+            .record
+            .as_ref()
+            .map_or_else(|| "live".into(), |p| p.display().to_string());
+        let mut run = Run::start(
+            config,
+            &replay_options,
+            &preamble,
+            true,
+            &name,
+            &config.topics.joint_states,
+        )?;
+        let mut recorder = Recorder::new(Path::new(&name));
+        let message = recorder.record_at(run.output(), &config.topics.tf_static, t0, &tf)?;
+        run.handle(&message)?;
+        Ok(Self {
+            config,
+            run,
+            recorder,
+            clock,
+            tracker: EncoderTracker::default(),
+            variant,
+            // Ranges arrive in metres; the unit only sets range_min/range_max.
+            unit: RangeUnit::Millimetres,
+            counters: BTreeMap::new(),
+            summary: LiveSummary {
+                filter: ReplaySummary::default(),
+                devices: BTreeMap::new(),
+                reconnects: BTreeMap::new(),
+                base_repeated_samples: 0,
+                base_missed_samples: 0,
+                compass_invalid: 0,
+                gps_fixes: 0,
+                recording: options.record.as_ref().map(|p| p.display().to_string()),
+            },
+        })
+    }
+
+    fn reading(
+        &mut self,
+        reading: Reading,
+        on_event: &mut dyn FnMut(LiveEvent),
+    ) -> Result<(), LiveError> {
+        let topics = &self.config.topics;
+        match reading {
+            Reading::Scan(ranges) => {
+                let t = self.clock.now();
+                let scan = messages::laser_scan(self.config, self.variant, self.unit, t, ranges);
+                self.feed(&topics.scan.clone(), &scan)?;
+            }
+            Reading::Base(r) => {
+                let Some(ticks) = self.tracker.update(r) else {
+                    return Ok(());
+                };
+                let t = self.clock.now();
+                let joints = messages::joint_state(self.config, t, ticks);
+                self.feed(&topics.joint_states.clone(), &joints)?;
+                let pose = self.run.localizer().pose();
+                let covariance = *self.run.localizer().covariance();
+                on_event(LiveEvent::Pose {
+                    t_ns: t,
+                    pose,
+                    covariance,
+                });
+                match r.bearing() {
+                    Some(bearing) => {
+                        let t = self.clock.now();
+                        let field = messages::compass(self.config, t, bearing);
+                        self.feed(&topics.compass.clone(), &field)?;
+                    }
+                    None => self.summary.compass_invalid += 1,
+                }
+            }
+            Reading::Fix(f) => {
+                let t = self.clock.now();
+                let fix = f.to_nav_sat_fix(t, &self.config.devices.gps_frame);
+                self.summary.gps_fixes += 1;
+                self.feed(FIX_TOPIC, &fix)?;
+            }
+            Reading::Counters(c) => {
+                let name = match c {
+                    DeviceCounters::Laser(_) => "laser",
+                    DeviceCounters::Base(_) => "base",
+                    DeviceCounters::Gps(_) => "gps",
+                };
+                self.counters.insert(name, c);
+            }
+            Reading::Status { .. } | Reading::Failed(_) => {}
+        }
+        Ok(())
+    }
+
+    /// Records a message and runs the filter on it.
+    fn feed<M: crate::ros2::RosMessage + crate::ros2::Stamped>(
+        &mut self,
+        topic: &str,
+        message: &M,
+    ) -> Result<(), LiveError> {
+        let m = self.recorder.record(self.run.output(), topic, message)?;
+        self.run.handle(&m)?;
+        Ok(())
+    }
+
+    fn device_status(&mut self, device: &str, level: u8, text: &str) -> Result<(), LiveError> {
+        self.diagnostics(vec![status(device, level, text, Vec::new())])
+    }
+
+    /// Every device's counters as one diagnostics message.
+    fn counters_diagnostics(&mut self) -> Result<(), LiveError> {
+        self.summary.base_repeated_samples = self.tracker.repeated;
+        self.summary.base_missed_samples = self.tracker.missed;
+        let statuses = self
+            .counters
+            .iter()
+            .map(|(name, c)| {
+                let values = match serde_json::to_value(c) {
+                    Ok(serde_json::Value::Object(map)) => map
+                        .into_iter()
+                        .map(|(k, v)| KeyValue {
+                            key: k,
+                            value: v.to_string(),
+                        })
+                        .collect(),
+                    _ => Vec::new(),
+                };
+                status(
+                    name,
+                    workers::OK,
+                    "counters since the last connection",
+                    values,
+                )
+            })
+            .collect();
+        self.diagnostics(statuses)
+    }
+
+    fn diagnostics(&mut self, statuses: Vec<DiagnosticStatus>) -> Result<(), LiveError> {
+        let t = self.clock.now();
+        let msg = DiagnosticArray {
+            header: Header {
+                stamp: Time::from_nanos(t).unwrap_or_default(),
+                frame_id: String::new(),
+            },
+            status: statuses,
+        };
+        self.recorder
+            .record(self.run.output(), DEVICE_DIAGNOSTICS_TOPIC, &msg)?;
+        Ok(())
+    }
+
+    fn finish(
+        mut self,
+        started: Instant,
+        failure: Option<LiveError>,
+    ) -> Result<LiveOutcome, LiveError> {
+        self.summary.base_repeated_samples = self.tracker.repeated;
+        self.summary.base_missed_samples = self.tracker.missed;
+        let outcome = self.run.finish(started, None)?;
+        self.summary.filter = outcome.summary;
+        self.summary.devices = self
+            .counters
+            .iter()
+            .map(|(k, v)| (*k, serde_json::to_value(v).unwrap_or_default()))
+            .collect();
+        Ok(LiveOutcome {
+            summary: self.summary,
+            failure,
+        })
+    }
+}
+
+fn status(device: &str, level: u8, text: &str, values: Vec<KeyValue>) -> DiagnosticStatus {
+    DiagnosticStatus {
+        level,
+        name: format!("ekf/{device}"),
+        message: text.into(),
+        hardware_id: device.into(),
+        values,
+    }
+}

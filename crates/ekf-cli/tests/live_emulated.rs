@@ -1,0 +1,255 @@
+//! `ekf live` against the device emulators on pseudo-terminals: faults are counted and
+//! never fused, a replugged laser is reconnected, SIGTERM finishes the recording, and
+//! `ekf replay` of the recording gives the same poses bit for bit. A silent device is an
+//! error naming its port.
+
+use ekf_cli::devices::sick::device::Sweep;
+use ekf_cli::devices::sick::RangeUnit;
+use ekf_cli::emulate::{Device, EmulatorOptions, Emulators, Fault, RobotSample};
+use ekf_cli::mcap_io::BagReader;
+use std::f64::consts::{FRAC_PI_2, TAU};
+use std::path::Path;
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+const ROOM: (f64, f64) = (8.0, 6.0);
+const TICKS_PER_REV: f64 = 500.0;
+const WHEEL_RADIUS: f64 = 0.05;
+const TRACK: f64 = 0.6;
+
+/// A robot driving a gentle arc in a rectangular room, with exact encoder ticks.
+struct Robot {
+    x: f64,
+    y: f64,
+    theta: f64,
+    phi_left: f64,
+    phi_right: f64,
+    t_ns: u64,
+}
+
+impl Robot {
+    fn new() -> Self {
+        Self {
+            x: 2.0,
+            y: 2.0,
+            theta: 0.3,
+            phi_left: 0.0,
+            phi_right: 0.0,
+            t_ns: 0,
+        }
+    }
+
+    /// Advances by `dt` at 0.25 m/s and 0.1 rad/s.
+    fn step(&mut self, dt: f64) {
+        let (v, w) = (0.25, 0.1);
+        self.phi_left += (v - w * TRACK / 2.0) / WHEEL_RADIUS * dt;
+        self.phi_right += (v + w * TRACK / 2.0) / WHEEL_RADIUS * dt;
+        let mid = self.theta + w * dt / 2.0;
+        self.x += v * dt * mid.cos();
+        self.y += v * dt * mid.sin();
+        self.theta += w * dt;
+        self.t_ns += (dt * 1e9) as u64;
+    }
+
+    fn range(&self, bearing: f64) -> f64 {
+        let a = self.theta + bearing;
+        let (c, s) = (a.cos(), a.sin());
+        let mut best = f64::INFINITY;
+        for (d, wall) in [
+            (c, ROOM.0 - self.x),
+            (-c, self.x),
+            (s, ROOM.1 - self.y),
+            (-s, self.y),
+        ] {
+            if d > 1e-9 {
+                best = best.min(wall / d);
+            }
+        }
+        best
+    }
+
+    fn sample(&self, with_scan: bool) -> RobotSample {
+        // Counters start near 2³² so they wrap during the run.
+        let ticks = |phi: f64| {
+            (u32::MAX - 200).wrapping_add((phi / TAU * TICKS_PER_REV).round() as i64 as u32)
+        };
+        let sweep = with_scan.then(|| Sweep {
+            angle_min: -FRAC_PI_2,
+            angle_increment: 0.5f64.to_radians(),
+            ranges: (0..361)
+                .map(|i| self.range(-FRAC_PI_2 + (i as f64 * 0.5).to_radians()))
+                .collect(),
+        });
+        RobotSample {
+            t_ns: self.t_ns,
+            left_ticks: ticks(self.phi_left),
+            right_ticks: ticks(self.phi_right),
+            bearing_deg: (90.0 - self.theta.to_degrees()).rem_euclid(360.0),
+            sweep,
+            fix: None,
+        }
+    }
+}
+
+fn start_emulators(dir: &Path) -> Emulators {
+    Emulators::start(&EmulatorOptions {
+        dir: dir.join("dev"),
+        unit: RangeUnit::Millimetres,
+        unit_id: 1,
+    })
+    .unwrap()
+}
+
+fn ekf() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_ekf"))
+}
+
+fn poses(path: &Path) -> Vec<(u64, Vec<u8>)> {
+    let bag = BagReader::open(path).unwrap();
+    bag.messages()
+        .unwrap()
+        .map(Result::unwrap)
+        .filter(|m| m.topic() == "/ekf/pose")
+        .map(|m| (m.log_time, m.data))
+        .collect()
+}
+
+#[test]
+fn faults_reconnect_sigterm_and_bit_identical_replay() {
+    let dir = tempfile::tempdir().unwrap();
+    let emulators = start_emulators(dir.path());
+    let recording = dir.path().join("run.mcap");
+    let mut live = ekf()
+        .args(["live", "--json", "--laser"])
+        .arg(emulators.path(Device::Laser))
+        .arg("--base")
+        .arg(emulators.path(Device::Base))
+        .arg("--record")
+        .arg(&recording)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+
+    // 9 s of driving, paced in real time at 10 Hz; the laser sweeps at 5 Hz.
+    let mut robot = Robot::new();
+    let started = Instant::now();
+    for k in 0..90u32 {
+        robot.step(0.1);
+        emulators.sample(robot.sample(k % 2 == 0));
+        match k {
+            20 => emulators.fault(Device::Laser, Fault::Disconnect(Duration::from_millis(600))),
+            55 => emulators.fault(Device::Laser, Fault::Garbage(50)),
+            59 => emulators.fault(Device::Laser, Fault::Truncate),
+            63 => emulators.fault(Device::Laser, Fault::BadChecksum),
+            65 => emulators.fault(Device::Base, Fault::Exception(4)),
+            67 => emulators.fault(Device::Base, Fault::BadChecksum),
+            _ => {}
+        }
+        let due = started + Duration::from_millis(100 * u64::from(k + 1));
+        std::thread::sleep(due.saturating_duration_since(Instant::now()));
+    }
+    let status = Command::new("kill")
+        .args(["-TERM", &live.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let deadline = Instant::now() + Duration::from_secs(60);
+    while live.try_wait().unwrap().is_none() {
+        assert!(
+            Instant::now() < deadline,
+            "ekf live did not stop on SIGTERM"
+        );
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    let output = live.wait_with_output().unwrap();
+    emulators.stop();
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "stderr: {stderr}");
+
+    // The replug was reported and the laser came back.
+    assert!(stderr.contains("reconnecting"), "{stderr}");
+    assert!(stderr.contains("back:"), "{stderr}");
+
+    // The summary (last line) counts the faults.
+    let summary: serde_json::Value = serde_json::from_str(stdout.lines().last().unwrap()).unwrap();
+    let laser = &summary["devices"]["laser"];
+    assert!(laser["garbage_bytes"].as_u64().unwrap() >= 50, "{summary}");
+    assert!(laser["truncated"].as_u64().unwrap() >= 1, "{summary}");
+    assert!(laser["bad_crc"].as_u64().unwrap() >= 1, "{summary}");
+    let base = &summary["devices"]["base"];
+    assert_eq!(base["exceptions"].as_u64(), Some(1), "{summary}");
+    assert_eq!(base["bad_crc"].as_u64(), Some(1), "{summary}");
+    assert!(
+        summary["reconnects"]["laser"].as_u64().unwrap() >= 1,
+        "{summary}"
+    );
+    assert!(
+        summary["filter"]["lines"]["fused"].as_u64().unwrap() > 10,
+        "{summary}"
+    );
+
+    // The estimate follows the robot (faults were not fused).
+    let last: serde_json::Value = serde_json::from_str(
+        stdout
+            .lines()
+            .rev()
+            .find(|l| l.contains("\"theta\""))
+            .unwrap(),
+    )
+    .unwrap();
+    // The robot's pose relative to its start (the filter starts at the origin).
+    let (dx, dy) = (robot.x - 2.0, robot.y - 2.0);
+    let (c, s) = (0.3f64.cos(), 0.3f64.sin());
+    let (ex, ey) = (c * dx + s * dy, -s * dx + c * dy);
+    let (x, y) = (last["x"].as_f64().unwrap(), last["y"].as_f64().unwrap());
+    assert!(
+        ((x - ex).powi(2) + (y - ey).powi(2)).sqrt() < 0.3,
+        "estimate ({x}, {y}), truth ({ex}, {ey})"
+    );
+
+    // The recording is complete and replays to the same poses, bit for bit.
+    let replayed = dir.path().join("replayed.mcap");
+    let out = ekf()
+        .arg("replay")
+        .arg(&recording)
+        .arg("--out")
+        .arg(&replayed)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let live_poses = poses(&recording);
+    assert!(live_poses.len() > 50, "{}", live_poses.len());
+    assert_eq!(live_poses, poses(&replayed));
+}
+
+#[test]
+fn a_silent_laser_is_a_timeout_naming_the_port() {
+    let dir = tempfile::tempdir().unwrap();
+    let emulators = start_emulators(dir.path());
+    emulators.fault(Device::Laser, Fault::Silence(Duration::from_secs(120)));
+    let laser = emulators.path(Device::Laser);
+    let out = ekf()
+        .args(["live", "--laser"])
+        .arg(&laser)
+        .arg("--base")
+        .arg(emulators.path(Device::Base))
+        .output()
+        .unwrap();
+    emulators.stop();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(
+        stderr.contains(&format!("laser on {}: timeout", laser.display())),
+        "{stderr}"
+    );
+    assert!(
+        stderr.contains("expected an ACK (06) and an A0 reply"),
+        "{stderr}"
+    );
+}
