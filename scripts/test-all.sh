@@ -27,8 +27,9 @@ RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps
 
 # ---------------------------------------------------------------------------------------
 # Python checks: readers we did not write (mcap, mcap-ros2-support, rosbags) decode what
-# `ekf` writes. A venv at .venv is created on first use and reused; the pinned requirements
-# are reinstalled only when tests/python/requirements.txt (or the interpreter) changes.
+# `ekf` writes, and the Python module ekf_loc agrees with FilterPy and with `ekf`. A venv
+# at .venv is created on first use and reused; the pinned requirements are reinstalled
+# only when tests/python/requirements.txt (or the interpreter) changes.
 # PYTHON picks the interpreter (default python3). EKF_REQUIRE_DATA=1 turns the skip of the
 # real-log tests (when ../shared/data is absent) into a failure.
 py_started=$SECONDS
@@ -76,6 +77,12 @@ cargo build -p ekf-cli --bins --examples
 target_dir=$(cargo metadata --no-deps --format-version 1 |
     "$VENV/bin/python" -c 'import json, sys; print(json.load(sys.stdin)["target_directory"])')
 export EKF_BIN="$target_dir/debug/ekf"
+
+# The Python module, built (debug profile, sharing the workspace's target directory) and
+# installed into the venv as an editable package; `pip install ./crates/ekf-py` builds the
+# same wheel in release mode for users.
+step "maturin develop: build the Python module ekf_loc into $VENV"
+VIRTUAL_ENV="$PWD/$VENV" "$VENV/bin/maturin" develop --quiet -m crates/ekf-py/Cargo.toml
 py_build_done=$SECONDS
 
 step "pytest tests/python"
@@ -89,6 +96,6 @@ elif [ "$pytest_status" -ne 0 ]; then
     exit "$pytest_status"
 fi
 py_done=$SECONDS
-printf 'Python part: %ds (venv and requirements %ds, cargo build %ds, pytest %ds)\n' \
+printf 'Python part: %ds (venv and requirements %ds, cargo build and maturin %ds, pytest %ds)\n' \
     $((py_done - py_started)) $((py_venv_done - py_started)) \
     $((py_build_done - py_venv_done)) $((py_done - py_build_done))

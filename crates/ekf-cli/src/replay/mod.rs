@@ -191,6 +191,8 @@ pub struct ReplayOutcome {
     /// The estimate at every motion step and scan (empty unless
     /// [`ReplayOptions::keep_trajectories`]).
     pub trajectory: Trajectory,
+    /// The covariance `(x, y, θ)` of each pose of [`trajectory`](Self::trajectory).
+    pub covariances: Vec<Matrix3<f64>>,
     /// The log's reference poses (empty if none, or unless kept).
     pub reference: Trajectory,
     /// Set when the log broke off (damage, a decode failure): everything before it was
@@ -628,11 +630,12 @@ impl<'a> Run<'a> {
             heading_rmse_deg: a.heading_rmse.to_degrees(),
         });
         summary.wall_time_s = started.elapsed().as_secs_f64();
-        let (trajectory, reference) = poses.kept.unwrap_or_default();
+        let kept = poses.kept.unwrap_or_default();
         Ok(ReplayOutcome {
             summary,
-            trajectory,
-            reference,
+            trajectory: kept.estimate,
+            covariances: kept.covariances,
+            reference: kept.reference,
             failure,
         })
     }
@@ -898,7 +901,8 @@ impl<'a> Run<'a> {
     /// A pose for the TUM trajectory and the output bag.
     fn record_pose(&mut self, now: u64) -> Result<(), ReplayError> {
         let pose = self.localizer.pose();
-        self.poses.estimate(StampedPose::new(now, pose))?;
+        self.poses
+            .estimate(StampedPose::new(now, pose), self.localizer.covariance())?;
         if let Some(out) = self.out.as_mut() {
             out.pose(now, &pose, self.localizer.covariance())?;
         }
