@@ -256,6 +256,34 @@ def test_replay_config_from_file_and_dict(ekf_bin, tmp_path):
     assert not np.array_equal(by_file.x, default.x)
 
 
+def test_simulate_writes_the_bytes_of_ekf_simulate_and_returns_the_truth(ekf_bin, tmp_path):
+    cli_log, py_log = tmp_path / "cli.mcap", tmp_path / "py.mcap"
+    cli = run_ekf(ekf_bin, "simulate", "paper", "--duration", "20", "--seed", "3",
+                  "--out", cli_log)
+    run = ekf_loc.simulate("paper", out=py_log, seed=3, duration=20)
+    assert py_log.read_bytes() == cli_log.read_bytes()
+    assert len(run.t) == len(run.x) == cli["stats"]["steps"] + 1 == 201
+    np.testing.assert_allclose(run.t[:3], [0.0, 0.1, 0.2], atol=1e-12)
+    for key in ["out"]:
+        cli.pop(key)
+        run.summary.pop(key)
+    assert run.summary == cli
+    # The paper scenario starts on its first edge at (2, 1) heading east, 1 m from the
+    # walls' loop, and drives at 0.3 m/s.
+    assert (run.x[0], run.y[0], run.theta[0]) == (2.0, 1.0, 0.0)
+    assert 5.0 < cli["stats"]["distance_m"] < 6.5
+    assert run.estimate_x.size == run.nees.size == 0
+    assert np.all(run.path_deviation < 0.15)
+
+
+def test_simulate_with_the_ekf_in_the_loop_reports_its_estimate_and_nees():
+    run = ekf_loc.simulate("paper", duration=30, steer_by="ekf")
+    err = np.hypot(run.estimate_x - run.x, run.estimate_y - run.y)
+    assert err.shape == run.nees.shape == (301,)
+    assert np.sqrt(np.mean(err ** 2)) < 0.02
+    assert np.all(np.isfinite(run.nees)) and 0.5 < run.nees.mean() < 10
+
+
 # ------------------------------------------------------------------------------ errors
 
 F = ekf_loc.Filter
@@ -271,6 +299,11 @@ ERRORS = [
     (lambda: F().update_compass(0.1, -1.0), ValueError,
      "compass variance is negative; a variance must be ≥ 0"),
     (lambda: F(pose=(0, 0)), ValueError, "pose: expected shape (3,) as (x, y, theta), got (2,)"),
+    (lambda: ekf_loc.simulate("moon"), ValueError, 'unknown scenario "moon"'),
+    (lambda: ekf_loc.simulate("paper", steer_by="luck"), ValueError,
+     'steer_by: expected one of truth, ekf, odometry, got "luck"'),
+    (lambda: ekf_loc.simulate("paper", resolution=0.3), ValueError, "--resolution"),
+    (lambda: ekf_loc.simulate("missing.json"), FileNotFoundError, "missing.json"),
     (lambda: F(covariance=np.ones((3, 3))), ValueError,
      "initial covariance is not positive definite"),
     (lambda: F(covariance=np.full((3, 3), np.nan)), ValueError,

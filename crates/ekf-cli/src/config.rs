@@ -74,6 +74,40 @@ pub struct Config {
     pub localizer: LocalizerConfig,
     /// Serial devices for `ekf live`.
     pub devices: crate::devices::DevicesConfig,
+    /// GPS fixes as position measurements.
+    pub gps: GpsConfig,
+}
+
+/// GPS fixes (`sensor_msgs/NavSatFix`) as position measurements: each fix is projected
+/// onto the east–north tangent plane about the origin ([`crate::geo::GeoOrigin`]),
+/// rotated into the map by `compass_calibration.map_offset`, and fused as `(x, y)` with
+/// the fix's own covariance (or `sigma` when the fix has none) through a 2-dof gate.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct GpsConfig {
+    /// Fuse the fixes (they are always recorded by `ekf live`).
+    pub fuse: bool,
+    /// Latitude of the map origin (degrees, north positive).
+    pub origin_latitude: f64,
+    /// Longitude of the map origin (degrees, east positive).
+    pub origin_longitude: f64,
+    /// Standard deviation of a fix in east and north (m) when it carries no covariance.
+    pub sigma: f64,
+    /// Chi-square gate on the 2-D position innovation.
+    pub gate_probability: f64,
+}
+
+impl Default for GpsConfig {
+    /// Off; origin (0, 0); σ 3 m (an uncorrected consumer receiver); gate 0.99.
+    fn default() -> Self {
+        Self {
+            fuse: false,
+            origin_latitude: 0.0,
+            origin_longitude: 0.0,
+            sigma: 3.0,
+            gate_probability: 0.99,
+        }
+    }
 }
 
 /// Topic names (DESIGN.md §5 defaults).
@@ -92,6 +126,8 @@ pub struct Topics {
     pub ground_truth: String,
     /// `tf2_msgs/msg/TFMessage` with the static transforms.
     pub tf_static: String,
+    /// `sensor_msgs/msg/NavSatFix`: GPS fixes (fused only with `gps.fuse`).
+    pub fix: String,
 }
 
 impl Default for Topics {
@@ -103,6 +139,7 @@ impl Default for Topics {
             compass: "/compass".into(),
             ground_truth: "/ground_truth".into(),
             tf_static: "/tf_static".into(),
+            fix: "/fix".into(),
         }
     }
 }
@@ -261,6 +298,7 @@ impl Config {
             ("initial.sigma_xy", self.initial.sigma_xy),
             ("initial.sigma_theta", self.initial.sigma_theta),
             ("localizer.compass.variance", l.compass.variance),
+            ("gps.sigma", self.gps.sigma),
         ];
         for (key, v) in positive {
             if !(v.is_finite() && v > 0.0) {
@@ -279,6 +317,7 @@ impl Config {
                 "localizer.matching.gate_probability",
                 l.matching.gate_probability,
             ),
+            ("gps.gate_probability", self.gps.gate_probability),
         ];
         for (key, p) in probabilities {
             if !(p > 0.0 && p < 1.0) {
@@ -311,6 +350,18 @@ impl Config {
                     &format!("expected a finite number, found {v}"),
                 ));
             }
+        }
+        if self.gps.origin_latitude.is_nan() || self.gps.origin_latitude.abs() > 89.0 {
+            return Err(invalid(
+                "gps.origin_latitude",
+                "expected degrees within ±89 (the tangent plane degenerates at the poles)",
+            ));
+        }
+        if self.gps.origin_longitude.is_nan() || self.gps.origin_longitude.abs() > 180.0 {
+            return Err(invalid(
+                "gps.origin_longitude",
+                "expected degrees within ±180",
+            ));
         }
         ekf_core::WheelNoise::new(l.wheel_noise.delta, l.wheel_noise.floor)
             .map_err(|e| invalid("localizer.wheel_noise", &e.to_string()))?;

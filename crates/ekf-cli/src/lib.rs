@@ -7,6 +7,7 @@ pub mod config;
 pub mod devices;
 pub mod emulate;
 pub mod eval;
+pub mod geo;
 pub mod import;
 pub mod live;
 pub mod mcap_io;

@@ -6,7 +6,6 @@ use clap::ValueEnum;
 use clap::{Parser, Subcommand};
 use ekf_cli::commands::{compare, emulate, evaluate, experiment, import, map, simulate};
 use ekf_cli::config::{Config, DEFAULT_TOML};
-use ekf_cli::emulate::robot as emulate_robot;
 use ekf_cli::emulate::Device;
 use ekf_cli::import::{CarmenFlavour, CarmenOptions, SyntheticCompass};
 use ekf_cli::live;
@@ -190,7 +189,7 @@ enum Command {
         /// Where the room's origin lies (`LAT,LON[,ALT]`; x east, y north): the GPS reports
         /// fixes of the robot. Default: no fix, as indoors.
         #[arg(long, allow_hyphen_values = true)]
-        gps_origin: Option<emulate_robot::GeoOrigin>,
+        gps_origin: Option<ekf_cli::geo::GeoOrigin>,
         /// Print the summary as JSON.
         #[arg(long)]
         json: bool,
@@ -538,7 +537,7 @@ fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
             };
             let scenario = simulate::load_scenario(&scenario, &options)?;
             create_parent(&out)?;
-            let summary = simulate::simulate_log(&scenario, &options, &out)?;
+            let (_, summary) = simulate::run_simulation(&scenario, &options, Some(&out))?;
             if json {
                 println!("{}", serde_json::to_string_pretty(&summary)?);
             } else {

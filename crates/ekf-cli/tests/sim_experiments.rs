@@ -154,7 +154,10 @@ fn the_laser_compass_filter_is_consistent_over_20_seeds() {
     // about 84 % and above the band at about 12 % (the first-scan map's fixed errors,
     // docs/RESULTS.md); the bounds guard that from getting worse.
     assert!(nees.inside, "{nees:?}");
-    assert!(nees.steps_inside >= 0.8 && nees.steps_above <= 0.15, "{nees:?}");
+    assert!(
+        nees.steps_inside >= 0.8 && nees.steps_above <= 0.15,
+        "{nees:?}"
+    );
 }
 
 #[test]

@@ -7,7 +7,8 @@
 //! - [`lines::extract_lines`], [`map::LineMap`], [`map::MapBuilder`],
 //!   [`matching::match_lines`]: line features, maps and data association;
 //! - [`localizer::Localizer`]: the `lrf_lines::Localizer` facade;
-//! - [`replay::replay`]: `ekf replay` on a ROS 2 bag, with trajectories as arrays.
+//! - [`replay::replay`]: `ekf replay` on a ROS 2 bag, with trajectories as arrays;
+//! - [`simulate::simulate`]: `ekf simulate`'s scenarios, with the truth as arrays.
 //!
 //! Conventions (ROS REP-103): SI units and radians; world x east, y north; robot x
 //! forward, y left; headings counter-clockwise from the world x axis, wrapped to
@@ -25,6 +26,7 @@ pub mod map;
 pub mod matching;
 pub mod params;
 pub mod replay;
+pub mod simulate;
 
 use pyo3::prelude::*;
 
@@ -41,9 +43,11 @@ fn _ekf_loc(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<matching::Matches>()?;
     m.add_class::<localizer::Localizer>()?;
     m.add_class::<replay::ReplayResult>()?;
+    m.add_class::<simulate::SimulationResult>()?;
     m.add_function(wrap_pyfunction!(lines::extract_lines, m)?)?;
     m.add_function(wrap_pyfunction!(matching::match_lines, m)?)?;
     m.add_function(wrap_pyfunction!(replay::replay, m)?)?;
+    m.add_function(wrap_pyfunction!(simulate::simulate, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     // Benchmarks refuse to time an unoptimised build.
     m.setattr("_debug_build", cfg!(debug_assertions))?;

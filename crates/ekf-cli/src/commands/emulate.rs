@@ -10,8 +10,9 @@
 use super::simulate::{load_scenario, SimulateError, SimulateOptions};
 use crate::config::{Config, ConfigError};
 use crate::devices::sick::RangeUnit;
-use crate::emulate::robot::{robot_sample, GeoOrigin};
+use crate::emulate::robot::robot_sample;
 use crate::emulate::{Device, EmulatorOptions, Emulators, GpsReport};
+use crate::geo::GeoOrigin;
 use crate::mcap_io::{BagWriter, WriteError};
 use crate::ros2::build::{odometry, MAP_FRAME};
 use crate::sim::{Sample, Scenario, Simulator};

@@ -6,7 +6,7 @@ use crate::mcap_io::WriteError;
 use crate::replay::{load_map, Mode, ReplayError};
 use crate::sim::{
     simulate, Estimator, Feedback, LaserModel, LogRecorder, Scenario, ScenarioError, SimError,
-    SimOptions, SimStats,
+    SimOptions, SimResult, SimStats,
 };
 use serde::Serialize;
 use std::path::Path;
@@ -90,7 +90,7 @@ pub struct SimulateSummary {
     pub scenario: String,
     /// The seed.
     pub seed: u64,
-    /// The log written.
+    /// The log written (empty when none was).
     pub out: String,
     /// Simulated time (s).
     pub duration_s: f64,
@@ -167,13 +167,15 @@ pub fn paper_estimator(mode: Mode) -> Result<Estimator, ConfigError> {
     })
 }
 
-/// Runs `scenario` and writes its log to `out`. If the run fails part way, what was
-/// simulated is in the log, which is finished and readable, and the error is returned.
-pub fn simulate_log(
+/// Runs `scenario`, writing its log to `out` when given, and returns the run (true
+/// trajectory, the in-loop estimate when the robot steered by one) with its summary. If
+/// the run fails part way, what was simulated is in the log, which is finished and
+/// readable, and the error is returned.
+pub fn run_simulation(
     scenario: &Scenario,
     options: &SimulateOptions,
-    out: &Path,
-) -> Result<SimulateSummary, SimulateError> {
+    out: Option<&Path>,
+) -> Result<(SimResult, SimulateSummary), SimulateError> {
     let (feedback, estimator) = match options.steering {
         Steering::Truth => (Feedback::Truth, None),
         Steering::Ekf => (
@@ -187,18 +189,25 @@ pub fn simulate_log(
         feedback,
         estimator,
     };
-    let mut recorder = LogRecorder::create(out, scenario, options.seed)?;
-    let run = simulate(scenario, &sim_options, Some(&mut recorder));
-    let messages = recorder.messages();
-    let finished = recorder.finish();
-    let run = run?;
-    finished?;
-    Ok(SimulateSummary {
+    let (run, messages) = match out {
+        Some(path) => {
+            let mut recorder = LogRecorder::create(path, scenario, options.seed)?;
+            let run = simulate(scenario, &sim_options, Some(&mut recorder));
+            let messages = recorder.messages();
+            let finished = recorder.finish();
+            let run = run?;
+            finished?;
+            (run, messages)
+        }
+        None => (simulate(scenario, &sim_options, None)?, 0),
+    };
+    let summary = SimulateSummary {
         scenario: scenario.name.clone(),
         seed: options.seed,
-        out: out.display().to_string(),
+        out: out.map(|p| p.display().to_string()).unwrap_or_default(),
         duration_s: run.stats.steps as f64 * scenario.dt,
         messages,
         stats: run.stats,
-    })
+    };
+    Ok((run, summary))
 }

@@ -2,10 +2,12 @@
 //! odometry poses, headings from `Imu` / `MagneticField`, reference poses, and the laser's
 //! mounting pose from `/tf_static`.
 
-use crate::config::CompassCalibrationConfig;
+use crate::config::{CompassCalibrationConfig, GpsConfig};
+use crate::geo::GeoOrigin;
 use crate::ros2::geometry_msgs::{Pose, TransformStamped};
-use crate::ros2::sensor_msgs::{Imu, JointState, MagneticField};
+use crate::ros2::sensor_msgs::{Imu, JointState, MagneticField, NavSatFix, NavSatStatus};
 use ekf_core::{heading_from_compass_bearing, wrap_angle, Motion, Pose2, WheelSpeeds};
+use nalgebra::{Matrix2, Vector2};
 
 /// Why one message could not be used; the replay counts it as a warning and goes on.
 #[derive(Debug, Clone, PartialEq)]
@@ -187,6 +189,44 @@ pub struct Heading {
     pub variance: Option<f64>,
 }
 
+/// A GPS fix as a position `(x, y)` in the map and its 2×2 covariance (m²): projected
+/// onto the east–north tangent plane about `gps`'s origin and rotated by `map_offset`
+/// (the map's rotation from ENU, as for the compass). The covariance is the fix's east /
+/// north block when it has one, else `gps.sigma²` per axis. `None` for a fix without a
+/// position (status no fix, or not finite).
+pub fn gps_position(
+    fix: &NavSatFix,
+    gps: &GpsConfig,
+    map_offset: f64,
+) -> Option<(f64, f64, Matrix2<f64>)> {
+    if fix.status.status < NavSatStatus::STATUS_FIX
+        || !(fix.latitude.is_finite() && fix.longitude.is_finite())
+    {
+        return None;
+    }
+    let origin = GeoOrigin {
+        latitude: gps.origin_latitude,
+        longitude: gps.origin_longitude,
+        altitude: 0.0,
+    };
+    let (east, north) = origin.local(fix.latitude, fix.longitude);
+    let c = &fix.position_covariance;
+    let block = Matrix2::new(c[0], c[1], c[3], c[4]);
+    let known = fix.position_covariance_type != NavSatFix::COVARIANCE_TYPE_UNKNOWN
+        && block.iter().all(|v| v.is_finite())
+        && c[0] > 0.0
+        && c[4] > 0.0;
+    let enu = if known {
+        block
+    } else {
+        Matrix2::identity() * gps.sigma * gps.sigma
+    };
+    let (s, co) = map_offset.sin_cos();
+    let r = Matrix2::new(co, -s, s, co);
+    let p = r * Vector2::new(east, north);
+    Some((p.x, p.y, r * enu * r.transpose()))
+}
+
 /// An `Imu`'s yaw (already ENU) rotated into the map frame; its variance from
 /// `orientation_covariance[8]` when that is positive (all zeros: unknown, `None`). An
 /// `Imu` with −1 in `orientation_covariance[0]` has no orientation estimate (as
@@ -293,6 +333,41 @@ pub fn mount_from_tf(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn gps_fixes_become_map_positions() {
+        let gps = GpsConfig {
+            origin_latitude: 48.0,
+            origin_longitude: 11.0,
+            ..GpsConfig::default()
+        };
+        let origin = GeoOrigin {
+            latitude: 48.0,
+            longitude: 11.0,
+            altitude: 0.0,
+        };
+        let at = origin.fix_at(10.0, 0.0);
+        let mut fix = NavSatFix {
+            latitude: at.latitude,
+            longitude: at.longitude,
+            ..NavSatFix::default()
+        };
+        // No covariance: σ = 3 m per axis. 10 m east is (10, 0) in an east-aligned map and
+        // (0, 10) in a map whose x axis points north (map_offset = π/2).
+        let (x, y, c) = gps_position(&fix, &gps, 0.0).unwrap();
+        assert!((x - 10.0).abs() < 1e-6 && y.abs() < 1e-6);
+        assert_eq!(c, Matrix2::identity() * 9.0);
+        let (x, y, _) = gps_position(&fix, &gps, std::f64::consts::FRAC_PI_2).unwrap();
+        assert!(x.abs() < 1e-6 && (y - 10.0).abs() < 1e-6, "{x} {y}");
+        // The fix's own east/north covariance, rotated with it.
+        fix.position_covariance[0] = 4.0;
+        fix.position_covariance[4] = 1.0;
+        fix.position_covariance_type = NavSatFix::COVARIANCE_TYPE_DIAGONAL_KNOWN;
+        let (_, _, c) = gps_position(&fix, &gps, std::f64::consts::FRAC_PI_2).unwrap();
+        assert!((c[(0, 0)] - 1.0).abs() < 1e-12 && (c[(1, 1)] - 4.0).abs() < 1e-12);
+        fix.status.status = NavSatStatus::STATUS_NO_FIX;
+        assert_eq!(gps_position(&fix, &gps, 0.0), None);
+    }
     use crate::ros2::geometry_msgs::{Quaternion, Transform, Vector3};
     use crate::ros2::std_msgs::Header;
     use core::f64::consts::FRAC_PI_2;

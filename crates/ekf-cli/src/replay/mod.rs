@@ -21,10 +21,11 @@ use crate::mcap_io::{BagMessage, BagReader, MessageError, ReadError, WriteError}
 use crate::ros2::geometry_msgs::TransformStamped;
 use crate::ros2::AnyMessage;
 use crate::trajectory::{StampedPose, Trajectory};
+use ekf_core::ChiSquareGate;
 use ekf_core::{Motion, Pose2, WheelSpeeds};
 use inputs::{
-    heading_from_imu, heading_from_magnetic_field, mount_from_tf, pose2, OdometryTracker, Skip,
-    WheelTracker,
+    gps_position, heading_from_imu, heading_from_magnetic_field, mount_from_tf, pose2,
+    OdometryTracker, Skip, WheelTracker,
 };
 use lrf_lines::{LineMap, Localizer, LocalizerError, ScanStage, StageClock};
 use nalgebra::Matrix3;
@@ -497,6 +498,7 @@ pub(crate) struct Run<'a> {
     odometry: OdometryTracker,
     timer: StageTimer,
     map_written: bool,
+    gps_gate: ChiSquareGate<f64>,
 }
 
 impl<'a> Run<'a> {
@@ -576,6 +578,12 @@ impl<'a> Run<'a> {
                 stages: Default::default(),
             },
             map_written: false,
+            gps_gate: ChiSquareGate::from_probability(config.gps.gate_probability, 2).map_err(
+                |error| LocalizerError::Config {
+                    group: "gps",
+                    error,
+                },
+            )?,
         };
         if let Some(out) = run.out.as_mut() {
             if options.map.is_some() {
@@ -661,6 +669,8 @@ impl<'a> Run<'a> {
             self.scan(message)
         } else if topic == t.compass && self.mode.uses_compass() {
             self.compass(message)
+        } else if topic == t.fix && self.config.gps.fuse {
+            self.gps(message)
         } else if topic == t.ground_truth {
             if let Some(pose) = reference_pose(message) {
                 self.poses.reference(StampedPose::new(now, pose));
@@ -811,6 +821,42 @@ impl<'a> Run<'a> {
         }
         // The corrected pose, like after a motion step or a scan: at one stamp the TUM
         // trajectory and the accuracy keep the last.
+        self.record_pose(now)
+    }
+
+    /// A GPS fix as a position in the map ([`crate::config::GpsConfig`]).
+    fn gps(&mut self, message: &BagMessage) -> Result<(), ReplayError> {
+        let now = message.log_time;
+        if now < self.start_ns {
+            return Ok(());
+        }
+        let AnyMessage::NavSatFix(fix) = message.decode()? else {
+            return Ok(());
+        };
+        let map_offset = self.config.compass_calibration.map_offset;
+        let Some((x, y, covariance)) = gps_position(&fix, &self.config.gps, map_offset) else {
+            self.summary.warn(
+                message.topic(),
+                now,
+                "GPS fix without a position (no fix, or not finite)".into(),
+            );
+            return Ok(());
+        };
+        self.catch_up(
+            fix.header
+                .stamp
+                .to_nanos()
+                .filter(|&t| t > 0)
+                .unwrap_or(now),
+        )?;
+        let outcome = self
+            .localizer
+            .update_position(x, y, covariance, Some(&self.gps_gate))?;
+        if outcome.accepted {
+            self.summary.gps.accepted += 1;
+        } else {
+            self.summary.gps.rejected += 1;
+        }
         self.record_pose(now)
     }
 

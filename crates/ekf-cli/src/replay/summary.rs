@@ -103,12 +103,12 @@ pub struct LineCounts {
     pub refused: u64,
 }
 
-/// Counts of the compass updates.
+/// Counts of a gated measurement's updates (compass headings, GPS fixes).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
-pub struct CompassCounts {
-    /// Headings fused.
+pub struct GatedCounts {
+    /// Measurements fused.
     pub accepted: u64,
-    /// Headings rejected by the chi-square gate.
+    /// Measurements rejected by the chi-square gate.
     pub rejected: u64,
 }
 
@@ -162,7 +162,9 @@ pub struct ReplaySummary {
     /// Laser pipeline counts.
     pub lines: LineCounts,
     /// Compass counts.
-    pub compass: CompassCounts,
+    pub compass: GatedCounts,
+    /// GPS fix counts (both 0 unless `gps.fuse`).
+    pub gps: GatedCounts,
     /// Per-stage timings of the scan updates.
     pub timings: Timings,
     /// Wall-clock time of the replay (s).

@@ -22,11 +22,13 @@ from ._ekf_loc import (
     MapBuilder,
     Matches,
     ReplayResult,
+    SimulationResult,
     UpdateOutcome,
     __version__,
     extract_lines,
     match_lines,
     replay,
+    simulate,
 )
 
 __all__ = [
@@ -39,9 +41,11 @@ __all__ = [
     "MapBuilder",
     "Matches",
     "ReplayResult",
+    "SimulationResult",
     "UpdateOutcome",
     "__version__",
     "extract_lines",
     "match_lines",
     "replay",
+    "simulate",
 ]

@@ -375,3 +375,50 @@ def replay(
 ) -> ReplayResult:
     """``ekf replay`` on a ROS 2 bag (same code), writing no files. ``mode``: odometry,
     compass, laser or laser+compass. ``map``: JSON line map (None: the first scan)."""
+
+class SimulationResult:
+    """A simulated run: the true pose at every 0.1 s step, the in-loop estimate and its
+    NEES when the robot steered by an estimator (empty arrays otherwise), the distance of
+    the true position from the commanded path, and the summary of ``ekf simulate --json``."""
+
+    @property
+    def t(self) -> _F64Array:
+        """(N,) time since the start (s)."""
+    @property
+    def x(self) -> _F64Array:
+        """(N,) true x (m)."""
+    @property
+    def y(self) -> _F64Array:
+        """(N,) true y (m)."""
+    @property
+    def theta(self) -> _F64Array:
+        """(N,) true heading (rad)."""
+    @property
+    def estimate_x(self) -> _F64Array: ...
+    @property
+    def estimate_y(self) -> _F64Array: ...
+    @property
+    def estimate_theta(self) -> _F64Array: ...
+    @property
+    def nees(self) -> _F64Array:
+        """(N,) the estimate's NEES against the truth."""
+    @property
+    def path_deviation(self) -> _F64Array:
+        """(N,) distance of the true position from the commanded path (m)."""
+    @property
+    def summary(self) -> dict[str, Any]: ...
+
+def simulate(
+    scenario: str,
+    out: Optional[_PathLike] = None,
+    seed: int = 1,
+    duration: Optional[float] = None,
+    steer_by: str = "truth",
+    resolution: Optional[float] = None,
+    slips_per_minute: Optional[float] = None,
+    compass_bias_deg: Optional[float] = None,
+    compass_outliers: Optional[float] = None,
+) -> SimulationResult:
+    """``ekf simulate`` (same code): ``scenario`` is paper, triangle, walls, l-room,
+    corridor or a JSON line map; ``out`` also writes the ROS 2 bag; ``steer_by`` is
+    truth, ekf or odometry. Same seed, same run."""

@@ -11,10 +11,10 @@ pub use error::LocalizerError;
 use crate::{LaserScan, LineExtractor, LineMap, MatchResult, Matcher, ObservedLine};
 use alloc::vec::Vec;
 use ekf_core::{
-    ChiSquareGate, Compass, DiffDrive, Ekf, LaserLine, Motion, Pose2, UpdateOutcome, WheelNoise,
-    WheelSpeeds,
+    ChiSquareGate, Compass, DiffDrive, Ekf, LaserLine, Motion, Pose2, Position, UpdateOutcome,
+    WheelNoise, WheelSpeeds,
 };
-use nalgebra::Matrix3;
+use nalgebra::{Matrix2, Matrix3};
 
 /// What happened to one matched line during the sequential update.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -232,6 +232,23 @@ impl Localizer {
         let compass = Compass::new(heading, variance).map_err(LocalizerError::Filter)?;
         self.ekf
             .update(&compass, Some(&self.compass_gate))
+            .map_err(LocalizerError::Filter)
+    }
+
+    /// Fuses an absolute position `(x, y)` in the map frame (m) with covariance
+    /// `covariance` (m²), e.g. a GPS fix projected about an origin: `h(x) = (x, y)`. With a
+    /// `gate`, a position whose `NIS` fails the 2-dof test is rejected and the state
+    /// left unchanged (`accepted == false`).
+    pub fn update_position(
+        &mut self,
+        x: f64,
+        y: f64,
+        covariance: Matrix2<f64>,
+        gate: Option<&ChiSquareGate<f64>>,
+    ) -> Result<UpdateOutcome<f64>, LocalizerError> {
+        let position = Position::new(x, y, covariance).map_err(LocalizerError::Filter)?;
+        self.ekf
+            .update(&position, gate)
             .map_err(LocalizerError::Filter)
     }
 
