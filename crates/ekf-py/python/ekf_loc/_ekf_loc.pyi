@@ -25,11 +25,13 @@ __all__ = [
     "MapBuilder",
     "Matches",
     "ReplayResult",
+    "SimulationResult",
     "UpdateOutcome",
     "__version__",
     "extract_lines",
     "match_lines",
     "replay",
+    "simulate",
 ]
 
 _ArrayLike: TypeAlias = npt.ArrayLike
@@ -376,6 +378,7 @@ def replay(
     """``ekf replay`` on a ROS 2 bag (same code), writing no files. ``mode``: odometry,
     compass, laser or laser+compass. ``map``: JSON line map (None: the first scan)."""
 
+@final
 class SimulationResult:
     """A simulated run: the true pose at every 0.1 s step, the in-loop estimate and its
     NEES when the robot steered by an estimator (empty arrays otherwise), the distance of
