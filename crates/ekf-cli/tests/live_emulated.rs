@@ -9,8 +9,9 @@ use ekf_cli::emulate::{Device, EmulatorOptions, Emulators, Fault, RobotSample};
 use ekf_cli::mcap_io::BagReader;
 use std::f64::consts::{FRAC_PI_2, TAU};
 use std::path::Path;
+use std::path::PathBuf;
 use std::process::{Command, Stdio};
-use std::time::{Duration, Instant};
+use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
 const ROOM: (f64, f64) = (8.0, 6.0);
 const TICKS_PER_REV: f64 = 500.0;
@@ -253,4 +254,151 @@ fn a_silent_laser_is_a_timeout_naming_the_port() {
         stderr.contains("expected an ACK (06) and an A0 reply"),
         "{stderr}"
     );
+}
+
+/// What a run of `ekf live --record --json` against the emulators left.
+struct LiveRun {
+    _dir: tempfile::TempDir,
+    recording: PathBuf,
+    stdout: String,
+    stderr: String,
+}
+
+impl LiveRun {
+    /// The summary (the last line of the JSON output).
+    fn summary(&self) -> serde_json::Value {
+        serde_json::from_str(self.stdout.lines().last().unwrap()).unwrap()
+    }
+
+    /// The recorded messages of `topic` as `T`.
+    fn messages<T: ekf_cli::ros2::RosMessage>(&self, topic: &str) -> Vec<T> {
+        BagReader::open(&self.recording)
+            .unwrap()
+            .messages()
+            .unwrap()
+            .map(Result::unwrap)
+            .filter(|m| m.topic() == topic)
+            .map(|m| m.decode_as::<T>().unwrap())
+            .collect()
+    }
+}
+
+/// Runs `ekf live` on emulators whose laser sends `unit`; `step(k, emulators)` is called
+/// for k = 0..steps at 10 Hz (real time) once the devices are up, then `ekf live` gets
+/// SIGTERM.
+fn run_live(unit: RangeUnit, steps: u32, mut step: impl FnMut(u32, &Emulators)) -> LiveRun {
+    let dir = tempfile::tempdir().unwrap();
+    let emulators = Emulators::start(&EmulatorOptions {
+        dir: dir.path().join("dev"),
+        unit,
+        unit_id: 1,
+    })
+    .unwrap();
+    let recording = dir.path().join("run.mcap");
+    let mut live = ekf()
+        .args(["live", "--json", "--laser"])
+        .arg(emulators.path(Device::Laser))
+        .arg("--base")
+        .arg(emulators.path(Device::Base))
+        .arg("--record")
+        .arg(&recording)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // The devices come up on samples: hold the first one until both are.
+    let deadline = Instant::now() + Duration::from_secs(60);
+    while !(emulators.ready(Device::Laser) && emulators.ready(Device::Base)) {
+        assert!(
+            Instant::now() < deadline,
+            "ekf live did not bring the devices up"
+        );
+        assert!(live.try_wait().unwrap().is_none(), "ekf live ended early");
+        step(0, &emulators);
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    let started = Instant::now();
+    for k in 0..steps {
+        step(k, &emulators);
+        let due = started + Duration::from_millis(100 * u64::from(k + 1));
+        std::thread::sleep(due.saturating_duration_since(Instant::now()));
+    }
+    let status = Command::new("kill")
+        .args(["-TERM", &live.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let deadline = Instant::now() + Duration::from_secs(60);
+    while live.try_wait().unwrap().is_none() {
+        assert!(
+            Instant::now() < deadline,
+            "ekf live did not stop on SIGTERM"
+        );
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    let output = live.wait_with_output().unwrap();
+    emulators.stop();
+    let run = LiveRun {
+        _dir: dir,
+        recording,
+        stdout: String::from_utf8_lossy(&output.stdout).into_owned(),
+        stderr: String::from_utf8_lossy(&output.stderr).into_owned(),
+    };
+    assert!(output.status.success(), "stderr: {}", run.stderr);
+    run
+}
+
+fn epoch_ns() -> u64 {
+    SystemTime::now()
+        .duration_since(UNIX_EPOCH)
+        .unwrap()
+        .as_nanos() as u64
+}
+
+/// A robot standing still whose sweep `k` measures `1 + k/1000` m everywhere (so a
+/// recorded scan says which sweep it is).
+fn still(k: u32, with_scan: bool) -> RobotSample {
+    RobotSample {
+        t_ns: u64::from(k) * 100_000_000,
+        left_ticks: 1000,
+        right_ticks: 2000,
+        bearing_deg: 45.0,
+        motion: None,
+        sweep: with_scan.then(|| Sweep {
+            angle_min: -FRAC_PI_2,
+            angle_increment: 0.5f64.to_radians(),
+            ranges: vec![1.0 + f64::from(k) / 1000.0; 361],
+        }),
+        gps: None,
+    }
+}
+
+#[test]
+fn scans_are_stamped_when_they_were_measured() {
+    // The emulated laser sends a sweep's telegram once it is complete, at 38400 baud
+    // (0.19 s for 732 bytes): the stamp must be the sweep's, not the arrival's.
+    let mut measured = Vec::new();
+    let run = run_live(RangeUnit::Millimetres, 40, |k, emulators| {
+        let with_scan = k % 2 == 0 && k > 0;
+        if with_scan {
+            measured.push((k, epoch_ns()));
+        }
+        emulators.sample(still(k, with_scan));
+    });
+    let scans: Vec<ekf_cli::ros2::sensor_msgs::LaserScan> = run.messages("/scan");
+    let mut errors_ms: Vec<f64> = scans
+        .iter()
+        .filter_map(|scan| {
+            let k = ((scan.ranges[0] - 1.0) * 1000.0).round() as u32;
+            let (_, t) = measured.iter().find(|(j, _)| *j == k)?;
+            let stamp = scan.header.stamp.to_nanos().unwrap();
+            Some((stamp as f64 - *t as f64) * 1e-6)
+        })
+        .collect();
+    assert!(errors_ms.len() >= 15, "{} scans matched", errors_ms.len());
+    errors_ms.sort_by(f64::total_cmp);
+    let median = errors_ms[errors_ms.len() / 2];
+    eprintln!("scan stamp - sweep time (ms): median {median:.1}, all {errors_ms:.1?}");
+    assert!(median.abs() < 40.0, "median {median} ms: {errors_ms:?}");
+    assert_eq!(run.summary()["late_readings"], 0, "{}", run.stdout);
 }

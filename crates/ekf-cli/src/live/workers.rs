@@ -23,14 +23,26 @@ pub(crate) const OK: u8 = 0;
 /// Something is wrong but the run goes on.
 pub(crate) const WARN: u8 = 1;
 
-/// What a device thread hands to the main loop.
-pub(crate) enum Reading {
+/// A device's measurement.
+pub(crate) enum Data {
     /// A laser scan: ranges (m) of the configured variant.
     Scan(Vec<f32>),
     /// A read of the base controller's registers.
     Base(BaseReading),
     /// A GPS fix.
     Fix(Fix),
+}
+
+/// What a device thread hands to the main loop.
+pub(crate) enum Reading {
+    /// A measurement, and when it was made: the laser's sweep, the base's or the GPS's
+    /// reply as the worker received it (not when the main loop gets to it).
+    Data {
+        /// When.
+        at: Instant,
+        /// What.
+        data: Data,
+    },
     /// The device's state changed (connected, lost, reconnected).
     Status {
         /// `laser`, `base` or `gps`.
@@ -39,6 +51,9 @@ pub(crate) enum Reading {
         level: u8,
         /// What happened.
         text: String,
+        /// With OK: the longest time from a measurement to its reception on this
+        /// connection (the laser's telegram on the line).
+        latency: Duration,
     },
     /// The device's counters since its last (re)connection.
     Counters(DeviceCounters),
@@ -72,6 +87,10 @@ pub(crate) trait LiveDevice: Sized {
     fn counters(&self) -> DeviceCounters;
     /// A line about the connection, e.g. the baud rate.
     fn describe(&self) -> String;
+    /// The longest time from a measurement to its reception.
+    fn latency(&self) -> Duration {
+        Duration::ZERO
+    }
     /// Leaves the device as it should be left (the laser stops its output).
     fn close(self) {}
 }
@@ -87,10 +106,21 @@ pub(crate) fn spawn<D: LiveDevice + 'static>(
 }
 
 fn status(tx: &Sender<Reading>, device: &'static str, level: u8, text: String) {
+    connected(tx, device, level, text, Duration::ZERO);
+}
+
+fn connected(
+    tx: &Sender<Reading>,
+    device: &'static str,
+    level: u8,
+    text: String,
+    latency: Duration,
+) {
     let _ = tx.send(Reading::Status {
         device,
         level,
         text,
+        latency,
     });
 }
 
@@ -107,11 +137,12 @@ fn work<D: LiveDevice>(
             return;
         }
     };
-    status(
+    connected(
         tx,
         D::NAME,
         OK,
         format!("{} on {port}: {}", D::NAME, device.describe()),
+        device.latency(),
     );
     let mut out = Vec::new();
     loop {
@@ -155,11 +186,12 @@ fn reconnect<D: LiveDevice>(
         }
         match D::connect(port, settings) {
             Ok(d) => {
-                status(
+                connected(
                     tx,
                     D::NAME,
                     OK,
                     format!("{} on {port}: back: {}", D::NAME, d.describe()),
+                    d.latency(),
                 );
                 return Some(d);
             }
@@ -190,8 +222,15 @@ impl LiveDevice for Laser {
 
     fn next(&mut self, out: &mut Vec<Reading>) -> Result<(), DeviceError> {
         let scan = self.0.next_scan()?;
-        out.push(Reading::Scan(scan.ranges()));
+        out.push(Reading::Data {
+            at: scan.measured,
+            data: Data::Scan(scan.values.ranges()),
+        });
         Ok(())
+    }
+
+    fn latency(&self) -> Duration {
+        self.0.latency()
     }
 
     fn counters(&self) -> DeviceCounters {
@@ -256,8 +295,11 @@ impl LiveDevice for Base {
             // Fell behind (a slow reply): poll on from now rather than in a burst.
             self.next_poll = Instant::now() + self.period;
         }
-        if let Some(r) = self.client.poll()? {
-            out.push(Reading::Base(r));
+        if let Some(reading) = self.client.poll()? {
+            out.push(Reading::Data {
+                at: Instant::now(),
+                data: Data::Base(reading),
+            });
         }
         Ok(())
     }
@@ -304,11 +346,15 @@ impl Gps {
                 during: "reading",
                 source,
             })?;
+        let at = Instant::now();
         let mut valid = false;
         for s in self.reader.push(&buf[..n]) {
             match s {
                 Sentence::Fix(f) => {
-                    out.push(Reading::Fix(f));
+                    out.push(Reading::Data {
+                        at,
+                        data: Data::Fix(f),
+                    });
                     valid = true;
                 }
                 Sentence::NoFix | Sentence::Other => valid = true,

@@ -63,6 +63,11 @@ impl SickScanner {
         self.baud
     }
 
+    /// The angle and resolution it scans.
+    pub fn variant(&self) -> Variant {
+        self.variant
+    }
+
     /// Whether continuous output is on.
     pub fn is_continuous(&self) -> bool {
         self.continuous
@@ -218,7 +223,7 @@ mod tests {
         };
         let mut laser = SickLaser::connect(wire, config()).unwrap();
         assert_eq!(laser.baud_rate(), BaudRate::B38400);
-        let scan = laser.next_scan().unwrap();
+        let scan = laser.next_scan().unwrap().values;
         assert_eq!(scan.values.len(), 361);
         // Every beam of 180° lies inside the sweep's ±1.6 rad: 2 m everywhere.
         assert!(scan.ranges().iter().all(|r| (r - 2.0).abs() < 1e-6));
