@@ -402,3 +402,63 @@ fn scans_are_stamped_when_they_were_measured() {
     assert!(median.abs() < 40.0, "median {median} ms: {errors_ms:?}");
     assert_eq!(run.summary()["late_readings"], 0, "{}", run.stdout);
 }
+
+#[test]
+fn a_power_cycled_base_controller_is_no_wheel_motion() {
+    // The controller's counts stand at millions of ticks; it is unplugged, and comes back
+    // power-cycled: counts and sample counter from 0.
+    let mut robot = Robot::new();
+    let mut restart: Option<(u32, u32)> = None;
+    let run = run_live(RangeUnit::Millimetres, 60, |k, emulators| {
+        if k > 0 {
+            robot.step(0.1);
+        }
+        let mut s = robot.sample(k % 2 == 0);
+        let (left, right) = (s.left_ticks, s.right_ticks);
+        match restart {
+            None => {
+                s.left_ticks = left.wrapping_add(3_000_000);
+                s.right_ticks = right.wrapping_add(3_000_000);
+            }
+            Some((l0, r0)) => {
+                s.left_ticks = left.wrapping_sub(l0);
+                s.right_ticks = right.wrapping_sub(r0);
+            }
+        }
+        emulators.sample(s);
+        if k == 20 {
+            emulators.fault(Device::Base, Fault::Disconnect(Duration::from_millis(300)));
+            restart = Some((left, right));
+        }
+    });
+    assert!(run.stderr.contains("base on"), "{}", run.stderr);
+    let summary = run.summary();
+    assert!(
+        summary["reconnects"]["base"].as_u64().unwrap_or(0) >= 1,
+        "{summary}"
+    );
+    // The wheels turn at most 0.28 m/s / 0.05 m = 5.6 rad/s: no recorded step of a wheel
+    // is more than that over its interval (the motion while the controller was away is
+    // lost, not invented), and the positions go on after the reconnection.
+    let joints: Vec<ekf_cli::ros2::sensor_msgs::JointState> = run.messages("/joint_states");
+    let mut fastest = 0.0f64;
+    for w in joints.windows(2) {
+        let dt = (w[1].header.stamp.to_nanos().unwrap() - w[0].header.stamp.to_nanos().unwrap())
+            as f64
+            * 1e-9;
+        for i in 0..2 {
+            fastest = fastest.max((w[1].position[i] - w[0].position[i]).abs() / dt);
+        }
+    }
+    assert!(
+        fastest < 7.0,
+        "a wheel turned at {fastest} rad/s; {summary}"
+    );
+    assert!(
+        joints.len() > 30,
+        "{} joint states; {summary}",
+        joints.len()
+    );
+    let after = summary["devices"]["base"]["replies"].as_u64().unwrap();
+    assert!(after > 5, "{summary}");
+}

@@ -84,6 +84,9 @@ pub struct LiveSummary {
     pub base_repeated_samples: u64,
     /// Base samples whose replies were lost (counter jumps).
     pub base_missed_samples: u64,
+    /// Base reads refused: an encoder change no wheel can make in the time, or a
+    /// sample counter that stepped back (the controller restarted its counts).
+    pub base_implausible_samples: u64,
     /// Compass bearings out of range (not fused).
     pub compass_invalid: u64,
     /// GPS fixes recorded.
@@ -198,9 +201,13 @@ pub fn run(
                 d.laser_baud
             ))
         })?;
-    if !(d.timeout_s > 0.0 && d.poll_rate_hz > 0.0 && d.ticks_per_revolution > 0.0) {
+    if !(d.timeout_s > 0.0
+        && d.poll_rate_hz > 0.0
+        && d.ticks_per_revolution > 0.0
+        && d.max_wheel_turns_per_s > 0.0)
+    {
         return Err(LiveError::Config(
-            "devices.timeout_s, devices.poll_rate_hz and devices.ticks_per_revolution must be > 0"
+            "devices.timeout_s, devices.poll_rate_hz, devices.ticks_per_revolution and devices.max_wheel_turns_per_s must be > 0"
                 .into(),
         ));
     }
@@ -366,6 +373,8 @@ struct Live<'a> {
     recorder: Recorder,
     clock: Clock,
     tracker: EncoderTracker,
+    /// The base worker's connection the tracker follows.
+    base_connection: u64,
     variant: Variant,
     unit: RangeUnit,
     counters: BTreeMap<&'static str, DeviceCounters>,
@@ -423,7 +432,10 @@ impl<'a> Live<'a> {
             run,
             recorder,
             clock,
-            tracker: EncoderTracker::default(),
+            tracker: EncoderTracker::new(
+                config.devices.max_wheel_turns_per_s * config.devices.ticks_per_revolution,
+            ),
+            base_connection: 0,
             variant,
             // Ranges arrive in metres; the unit only sets range_min/range_max.
             unit: RangeUnit::Millimetres,
@@ -434,6 +446,7 @@ impl<'a> Live<'a> {
                 reconnects: BTreeMap::new(),
                 base_repeated_samples: 0,
                 base_missed_samples: 0,
+                base_implausible_samples: 0,
                 compass_invalid: 0,
                 gps_fixes: 0,
                 late_readings: 0,
@@ -504,8 +517,16 @@ impl<'a> Live<'a> {
                 let scan = messages::laser_scan(self.config, self.variant, self.unit, t, ranges);
                 self.feed(&topics.scan.clone(), &scan)?;
             }
-            Data::Base(r) => {
-                let Some(ticks) = self.tracker.update(r) else {
+            Data::Base {
+                reading: r,
+                connection,
+            } => {
+                if connection != self.base_connection {
+                    // A power-cycled controller restarts its counts and counter at 0.
+                    self.tracker.restart();
+                    self.base_connection = connection;
+                }
+                let Some(ticks) = self.tracker.update(r, self.clock.stamp(at)) else {
                     return Ok(());
                 };
                 let t = self.stamp(at);
@@ -556,6 +577,7 @@ impl<'a> Live<'a> {
     fn counters_diagnostics(&mut self) -> Result<(), LiveError> {
         self.summary.base_repeated_samples = self.tracker.repeated;
         self.summary.base_missed_samples = self.tracker.missed;
+        self.summary.base_implausible_samples = self.tracker.implausible;
         let statuses = self
             .counters
             .iter()
@@ -602,6 +624,7 @@ impl<'a> Live<'a> {
     ) -> Result<LiveOutcome, LiveError> {
         self.summary.base_repeated_samples = self.tracker.repeated;
         self.summary.base_missed_samples = self.tracker.missed;
+        self.summary.base_implausible_samples = self.tracker.implausible;
         let outcome = self.run.finish(started, None)?;
         self.summary.filter = outcome.summary;
         self.summary.devices = self

@@ -27,8 +27,14 @@ pub(crate) const WARN: u8 = 1;
 pub(crate) enum Data {
     /// A laser scan: ranges (m) of the configured variant.
     Scan(Vec<f32>),
-    /// A read of the base controller's registers.
-    Base(BaseReading),
+    /// A read of the base controller's registers, with the number of the connection it
+    /// came over (a reconnected controller may have restarted its counts).
+    Base {
+        /// The registers.
+        reading: BaseReading,
+        /// 0 for the first connection, +1 for each reconnection.
+        connection: u64,
+    },
     /// A GPS fix.
     Fix(Fix),
 }
@@ -81,8 +87,8 @@ pub(crate) trait LiveDevice: Sized {
     type Settings: Send + 'static;
     /// Opens the port and brings the device up; a silent device is an error.
     fn connect(port: &str, settings: &Self::Settings) -> Result<Self, DeviceError>;
-    /// Reads the next readings into `out`.
-    fn next(&mut self, out: &mut Vec<Reading>) -> Result<(), DeviceError>;
+    /// Reads the next readings into `out`; `connection` counts reconnections.
+    fn next(&mut self, out: &mut Vec<Reading>, connection: u64) -> Result<(), DeviceError>;
     /// Counts so far.
     fn counters(&self) -> DeviceCounters;
     /// A line about the connection, e.g. the baud rate.
@@ -145,12 +151,13 @@ fn work<D: LiveDevice>(
         device.latency(),
     );
     let mut out = Vec::new();
+    let mut connection = 0;
     loop {
         if stop.load(Ordering::Relaxed) {
             device.close();
             return;
         }
-        let step = device.next(&mut out);
+        let step = device.next(&mut out, connection);
         for r in out.drain(..) {
             if tx.send(r).is_err() {
                 return;
@@ -161,7 +168,10 @@ fn work<D: LiveDevice>(
             status(tx, D::NAME, WARN, format!("{e}; reconnecting"));
             drop(device);
             match reconnect::<D>(port, settings, tx, stop) {
-                Some(d) => device = d,
+                Some(d) => {
+                    device = d;
+                    connection += 1;
+                }
                 None => return,
             }
         }
@@ -220,7 +230,7 @@ impl LiveDevice for Laser {
         SickLaser::connect(link, *settings).map(Laser)
     }
 
-    fn next(&mut self, out: &mut Vec<Reading>) -> Result<(), DeviceError> {
+    fn next(&mut self, out: &mut Vec<Reading>, _: u64) -> Result<(), DeviceError> {
         let scan = self.0.next_scan()?;
         out.push(Reading::Data {
             at: scan.measured,
@@ -285,7 +295,7 @@ impl LiveDevice for Base {
         })
     }
 
-    fn next(&mut self, out: &mut Vec<Reading>) -> Result<(), DeviceError> {
+    fn next(&mut self, out: &mut Vec<Reading>, connection: u64) -> Result<(), DeviceError> {
         let now = Instant::now();
         if self.next_poll > now {
             std::thread::sleep(self.next_poll - now);
@@ -298,7 +308,10 @@ impl LiveDevice for Base {
         if let Some(reading) = self.client.poll()? {
             out.push(Reading::Data {
                 at: Instant::now(),
-                data: Data::Base(reading),
+                data: Data::Base {
+                    reading,
+                    connection,
+                },
             });
         }
         Ok(())
@@ -394,7 +407,7 @@ impl LiveDevice for Gps {
         Ok(gps)
     }
 
-    fn next(&mut self, out: &mut Vec<Reading>) -> Result<(), DeviceError> {
+    fn next(&mut self, out: &mut Vec<Reading>, _: u64) -> Result<(), DeviceError> {
         self.read(out).map(|_| ())
     }
 
