@@ -462,3 +462,26 @@ fn a_power_cycled_base_controller_is_no_wheel_motion() {
     let after = summary["devices"]["base"]["replies"].as_u64().unwrap();
     assert!(after > 5, "{summary}");
 }
+
+#[test]
+fn a_scanner_in_centimetres_keeps_its_long_ranges() {
+    // In cm mode (the 80 m mode) a return at 9.5 m is a range like any other.
+    let run = run_live(RangeUnit::Centimetres, 15, |k, emulators| {
+        let mut s = still(k, k % 2 == 0);
+        if let Some(sweep) = s.sweep.as_mut() {
+            sweep.ranges.iter_mut().for_each(|r| *r = 9.5);
+        }
+        emulators.sample(s);
+    });
+    let scans: Vec<ekf_cli::ros2::sensor_msgs::LaserScan> = run.messages("/scan");
+    assert!(scans.len() >= 5, "{} scans", scans.len());
+    for scan in &scans {
+        assert!(
+            (scan.range_max - 81.82).abs() < 1e-3 && (scan.range_min - 0.01).abs() < 1e-6,
+            "range_min {} range_max {}",
+            scan.range_min,
+            scan.range_max
+        );
+        assert!(scan.ranges.iter().all(|r| (r - 9.5).abs() < 1e-4));
+    }
+}

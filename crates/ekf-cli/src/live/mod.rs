@@ -9,7 +9,7 @@ mod workers;
 
 use crate::config::{Config, MotionSource};
 use crate::devices::modbus_base::{BaseConfig, EncoderTracker};
-use crate::devices::sick::{BaudRate, RangeUnit, SickConfig, Variant};
+use crate::devices::sick::{BaudRate, SickConfig, Variant};
 use crate::devices::DeviceError;
 use crate::replay::{Mode, Preamble, ReplayError, ReplayOptions, ReplaySummary, Run};
 use crate::ros2::builtin_interfaces::Time;
@@ -376,7 +376,6 @@ struct Live<'a> {
     /// The base worker's connection the tracker follows.
     base_connection: u64,
     variant: Variant,
-    unit: RangeUnit,
     counters: BTreeMap<&'static str, DeviceCounters>,
     summary: LiveSummary,
     /// Measurements held back until none made before them can still arrive, in the
@@ -437,8 +436,6 @@ impl<'a> Live<'a> {
             ),
             base_connection: 0,
             variant,
-            // Ranges arrive in metres; the unit only sets range_min/range_max.
-            unit: RangeUnit::Millimetres,
             counters: BTreeMap::new(),
             summary: LiveSummary {
                 filter: ReplaySummary::default(),
@@ -512,9 +509,9 @@ impl<'a> Live<'a> {
     ) -> Result<(), LiveError> {
         let topics = &self.config.topics;
         match data {
-            Data::Scan(ranges) => {
+            Data::Scan { ranges, unit } => {
                 let t = self.stamp(at);
-                let scan = messages::laser_scan(self.config, self.variant, self.unit, t, ranges);
+                let scan = messages::laser_scan(self.config, self.variant, unit, t, ranges);
                 self.feed(&topics.scan.clone(), &scan)?;
             }
             Data::Base {

@@ -4,7 +4,7 @@
 
 use crate::devices::gps::{Fix, NmeaCounters, NmeaReader, Sentence};
 use crate::devices::modbus_base::{BaseClient, BaseConfig, BaseCounters, BaseReading};
-use crate::devices::sick::{SickConfig, SickCounters, SickLaser};
+use crate::devices::sick::{RangeUnit, SickConfig, SickCounters, SickLaser};
 use crate::devices::{DeviceError, Link, SerialLink};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::Sender;
@@ -25,8 +25,14 @@ pub(crate) const WARN: u8 = 1;
 
 /// A device's measurement.
 pub(crate) enum Data {
-    /// A laser scan: ranges (m) of the configured variant.
-    Scan(Vec<f32>),
+    /// A laser scan of the configured variant.
+    Scan {
+        /// Ranges (m).
+        ranges: Vec<f32>,
+        /// The unit the scanner sent them in (bits 14-15 of the count word): it sets
+        /// the scan's range limits.
+        unit: RangeUnit,
+    },
     /// A read of the base controller's registers, with the number of the connection it
     /// came over (a reconnected controller may have restarted its counts).
     Base {
@@ -234,7 +240,10 @@ impl LiveDevice for Laser {
         let scan = self.0.next_scan()?;
         out.push(Reading::Data {
             at: scan.measured,
-            data: Data::Scan(scan.values.ranges()),
+            data: Data::Scan {
+                ranges: scan.values.ranges(),
+                unit: scan.values.unit,
+            },
         });
         Ok(())
     }
