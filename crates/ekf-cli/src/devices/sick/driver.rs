@@ -268,7 +268,10 @@ impl<L: Link> SickLaser<L> {
     }
 
     /// Sends `request` and waits for the reply `reply_command`, skipping other telegrams
-    /// (scans still in flight). A NAK is a refusal.
+    /// (scans still in flight). A NAK is a refusal. When the line goes quiet (a read
+    /// slice without bytes: many byte times) with bytes still waiting - the head of a
+    /// telegram that will not be completed, or an STX in range data with a bogus length -
+    /// they are flushed, so a reply behind them is not lost.
     fn transact(&mut self, request: &Telegram, reply_command: u8) -> Result<Telegram, DeviceError> {
         let bytes = request.encode();
         self.link
@@ -277,19 +280,19 @@ impl<L: Link> SickLaser<L> {
         let deadline = Instant::now() + self.config.reply_timeout;
         loop {
             while let Some(event) = self.parser.next_event() {
-                match event {
-                    Event::Telegram(t) if t.command == reply_command => return Ok(t),
-                    Event::Nak => {
-                        self.counters.naks += 1;
-                        return Err(self.refused(format!("NAK (15) to the request {bytes:02x?}")));
+                if let Some(reply) = self.awaited(event, reply_command, &bytes) {
+                    return reply;
+                }
+            }
+            let quiet = Instant::now() >= deadline || self.read()? == 0;
+            if quiet && self.parser.pending() > 0 {
+                for event in self.parser.finish() {
+                    if let Some(reply) = self.awaited(event, reply_command, &bytes) {
+                        return reply;
                     }
-                    other => self.note(&other),
                 }
             }
             if Instant::now() >= deadline {
-                for event in self.parser.finish() {
-                    self.note(&event);
-                }
                 return Err(self.silent(
                     self.config.reply_timeout,
                     format!(
@@ -299,7 +302,29 @@ impl<L: Link> SickLaser<L> {
                     ),
                 ));
             }
-            self.read()?;
+        }
+    }
+
+    /// What an event means while waiting for `reply_command` to `request`: the reply,
+    /// a refusal (NAK), or nothing (noted).
+    fn awaited(
+        &mut self,
+        event: Event,
+        reply_command: u8,
+        request: &[u8],
+    ) -> Option<Result<Telegram, DeviceError>> {
+        match event {
+            Event::Telegram(t) if t.command == reply_command => Some(Ok(t)),
+            Event::Nak => {
+                self.counters.naks += 1;
+                Some(Err(
+                    self.refused(format!("NAK (15) to the request {request:02x?}"))
+                ))
+            }
+            other => {
+                self.note(&other);
+                None
+            }
         }
     }
 
@@ -322,7 +347,8 @@ impl<L: Link> SickLaser<L> {
         Ok(())
     }
 
-    fn read(&mut self) -> Result<(), DeviceError> {
+    /// Reads what is there (waiting at most a read slice); the number of bytes.
+    fn read(&mut self) -> Result<usize, DeviceError> {
         let mut buf = [0u8; 1024];
         let n = self
             .link
@@ -332,7 +358,7 @@ impl<L: Link> SickLaser<L> {
             self.last_read = Instant::now();
         }
         self.parser.push(&buf[..n]);
-        Ok(())
+        Ok(n)
     }
 
     fn io(&self, during: &'static str, source: std::io::Error) -> DeviceError {
