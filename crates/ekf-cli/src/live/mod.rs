@@ -18,7 +18,7 @@ use crate::ros2::std_msgs::Header;
 use ekf_core::Pose2;
 use messages::{RecordError, Recorder};
 use nalgebra::Matrix3;
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{self, RecvTimeoutError};
@@ -273,8 +273,8 @@ pub fn run(
             return Err(e);
         }
     };
-    let mut connected = 0;
-    let expected = threads.len();
+    // Devices that have connected once: a further OK from one is a reconnection.
+    let mut connected: BTreeSet<&'static str> = BTreeSet::new();
     let mut failure = None;
     let mut last_diagnostics = Instant::now();
     // Until the laser says at which rate it runs: the configured one.
@@ -309,8 +309,7 @@ pub fn run(
                     latency: l,
                 } => {
                     if level == workers::OK {
-                        connected += 1;
-                        if connected > expected {
+                        if !connected.insert(device) {
                             *live.summary.reconnects.entry(device).or_default() += 1;
                         }
                         latency.insert(device, l);
