@@ -9,8 +9,9 @@ use ekf_cli::emulate::{Device, EmulatorOptions, Emulators, Fault, RobotSample};
 use ekf_cli::mcap_io::BagReader;
 use std::f64::consts::{FRAC_PI_2, TAU};
 use std::path::Path;
+use std::path::PathBuf;
 use std::process::{Command, Stdio};
-use std::time::{Duration, Instant};
+use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
 const ROOM: (f64, f64) = (8.0, 6.0);
 const TICKS_PER_REV: f64 = 500.0;
@@ -253,4 +254,234 @@ fn a_silent_laser_is_a_timeout_naming_the_port() {
         stderr.contains("expected an ACK (06) and an A0 reply"),
         "{stderr}"
     );
+}
+
+/// What a run of `ekf live --record --json` against the emulators left.
+struct LiveRun {
+    _dir: tempfile::TempDir,
+    recording: PathBuf,
+    stdout: String,
+    stderr: String,
+}
+
+impl LiveRun {
+    /// The summary (the last line of the JSON output).
+    fn summary(&self) -> serde_json::Value {
+        serde_json::from_str(self.stdout.lines().last().unwrap()).unwrap()
+    }
+
+    /// The recorded messages of `topic` as `T`.
+    fn messages<T: ekf_cli::ros2::RosMessage>(&self, topic: &str) -> Vec<T> {
+        BagReader::open(&self.recording)
+            .unwrap()
+            .messages()
+            .unwrap()
+            .map(Result::unwrap)
+            .filter(|m| m.topic() == topic)
+            .map(|m| m.decode_as::<T>().unwrap())
+            .collect()
+    }
+}
+
+/// Runs `ekf live` on emulators whose laser sends `unit`; `step(k, emulators)` is called
+/// for k = 0..steps at 10 Hz (real time) once the devices are up, then `ekf live` gets
+/// SIGTERM.
+fn run_live(unit: RangeUnit, steps: u32, mut step: impl FnMut(u32, &Emulators)) -> LiveRun {
+    let dir = tempfile::tempdir().unwrap();
+    let emulators = Emulators::start(&EmulatorOptions {
+        dir: dir.path().join("dev"),
+        unit,
+        unit_id: 1,
+    })
+    .unwrap();
+    let recording = dir.path().join("run.mcap");
+    let mut live = ekf()
+        .args(["live", "--json", "--laser"])
+        .arg(emulators.path(Device::Laser))
+        .arg("--base")
+        .arg(emulators.path(Device::Base))
+        .arg("--record")
+        .arg(&recording)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // The devices come up on samples: hold the first one until both are.
+    let deadline = Instant::now() + Duration::from_secs(60);
+    while !(emulators.ready(Device::Laser) && emulators.ready(Device::Base)) {
+        assert!(
+            Instant::now() < deadline,
+            "ekf live did not bring the devices up"
+        );
+        assert!(live.try_wait().unwrap().is_none(), "ekf live ended early");
+        step(0, &emulators);
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    let started = Instant::now();
+    for k in 0..steps {
+        step(k, &emulators);
+        let due = started + Duration::from_millis(100 * u64::from(k + 1));
+        std::thread::sleep(due.saturating_duration_since(Instant::now()));
+    }
+    let status = Command::new("kill")
+        .args(["-TERM", &live.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let deadline = Instant::now() + Duration::from_secs(60);
+    while live.try_wait().unwrap().is_none() {
+        assert!(
+            Instant::now() < deadline,
+            "ekf live did not stop on SIGTERM"
+        );
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    let output = live.wait_with_output().unwrap();
+    emulators.stop();
+    let run = LiveRun {
+        _dir: dir,
+        recording,
+        stdout: String::from_utf8_lossy(&output.stdout).into_owned(),
+        stderr: String::from_utf8_lossy(&output.stderr).into_owned(),
+    };
+    assert!(output.status.success(), "stderr: {}", run.stderr);
+    run
+}
+
+fn epoch_ns() -> u64 {
+    SystemTime::now()
+        .duration_since(UNIX_EPOCH)
+        .unwrap()
+        .as_nanos() as u64
+}
+
+/// A robot standing still whose sweep `k` measures `1 + k/1000` m everywhere (so a
+/// recorded scan says which sweep it is).
+fn still(k: u32, with_scan: bool) -> RobotSample {
+    RobotSample {
+        t_ns: u64::from(k) * 100_000_000,
+        left_ticks: 1000,
+        right_ticks: 2000,
+        bearing_deg: 45.0,
+        motion: None,
+        sweep: with_scan.then(|| Sweep {
+            angle_min: -FRAC_PI_2,
+            angle_increment: 0.5f64.to_radians(),
+            ranges: vec![1.0 + f64::from(k) / 1000.0; 361],
+        }),
+        gps: None,
+    }
+}
+
+#[test]
+fn scans_are_stamped_when_they_were_measured() {
+    // The emulated laser sends a sweep's telegram once it is complete, at 38400 baud
+    // (0.19 s for 732 bytes): the stamp must be the sweep's, not the arrival's.
+    let mut measured = Vec::new();
+    let run = run_live(RangeUnit::Millimetres, 40, |k, emulators| {
+        let with_scan = k % 2 == 0 && k > 0;
+        if with_scan {
+            measured.push((k, epoch_ns()));
+        }
+        emulators.sample(still(k, with_scan));
+    });
+    let scans: Vec<ekf_cli::ros2::sensor_msgs::LaserScan> = run.messages("/scan");
+    let mut errors_ms: Vec<f64> = scans
+        .iter()
+        .filter_map(|scan| {
+            let k = ((scan.ranges[0] - 1.0) * 1000.0).round() as u32;
+            let (_, t) = measured.iter().find(|(j, _)| *j == k)?;
+            let stamp = scan.header.stamp.to_nanos().unwrap();
+            Some((stamp as f64 - *t as f64) * 1e-6)
+        })
+        .collect();
+    assert!(errors_ms.len() >= 15, "{} scans matched", errors_ms.len());
+    errors_ms.sort_by(f64::total_cmp);
+    let median = errors_ms[errors_ms.len() / 2];
+    eprintln!("scan stamp - sweep time (ms): median {median:.1}, all {errors_ms:.1?}");
+    assert!(median.abs() < 40.0, "median {median} ms: {errors_ms:?}");
+    assert_eq!(run.summary()["late_readings"], 0, "{}", run.stdout);
+}
+
+#[test]
+fn a_power_cycled_base_controller_is_no_wheel_motion() {
+    // The controller's counts stand at millions of ticks; it is unplugged, and comes back
+    // power-cycled: counts and sample counter from 0.
+    let mut robot = Robot::new();
+    let mut restart: Option<(u32, u32)> = None;
+    let run = run_live(RangeUnit::Millimetres, 60, |k, emulators| {
+        if k > 0 {
+            robot.step(0.1);
+        }
+        let mut s = robot.sample(k % 2 == 0);
+        let (left, right) = (s.left_ticks, s.right_ticks);
+        match restart {
+            None => {
+                s.left_ticks = left.wrapping_add(3_000_000);
+                s.right_ticks = right.wrapping_add(3_000_000);
+            }
+            Some((l0, r0)) => {
+                s.left_ticks = left.wrapping_sub(l0);
+                s.right_ticks = right.wrapping_sub(r0);
+            }
+        }
+        emulators.sample(s);
+        if k == 20 {
+            emulators.fault(Device::Base, Fault::Disconnect(Duration::from_millis(300)));
+            restart = Some((left, right));
+        }
+    });
+    assert!(run.stderr.contains("base on"), "{}", run.stderr);
+    let summary = run.summary();
+    assert!(
+        summary["reconnects"]["base"].as_u64().unwrap_or(0) >= 1,
+        "{summary}"
+    );
+    // The wheels turn at most 0.28 m/s / 0.05 m = 5.6 rad/s: no recorded step of a wheel
+    // is more than that over its interval (the motion while the controller was away is
+    // lost, not invented), and the positions go on after the reconnection.
+    let joints: Vec<ekf_cli::ros2::sensor_msgs::JointState> = run.messages("/joint_states");
+    let mut fastest = 0.0f64;
+    for w in joints.windows(2) {
+        let dt = (w[1].header.stamp.to_nanos().unwrap() - w[0].header.stamp.to_nanos().unwrap())
+            as f64
+            * 1e-9;
+        for i in 0..2 {
+            fastest = fastest.max((w[1].position[i] - w[0].position[i]).abs() / dt);
+        }
+    }
+    assert!(
+        fastest < 7.0,
+        "a wheel turned at {fastest} rad/s; {summary}"
+    );
+    assert!(
+        joints.len() > 30,
+        "{} joint states; {summary}",
+        joints.len()
+    );
+    let after = summary["devices"]["base"]["replies"].as_u64().unwrap();
+    assert!(after > 5, "{summary}");
+}
+
+#[test]
+fn a_scanner_in_centimetres_keeps_its_long_ranges() {
+    // In cm mode (the 80 m mode) a return at 9.5 m is a range like any other.
+    let run = run_live(RangeUnit::Centimetres, 15, |k, emulators| {
+        let mut s = still(k, k % 2 == 0);
+        if let Some(sweep) = s.sweep.as_mut() {
+            sweep.ranges.iter_mut().for_each(|r| *r = 9.5);
+        }
+        emulators.sample(s);
+    });
+    let scans: Vec<ekf_cli::ros2::sensor_msgs::LaserScan> = run.messages("/scan");
+    assert!(scans.len() >= 5, "{} scans", scans.len());
+    for scan in &scans {
+        assert!(
+            (scan.range_max - 81.82).abs() < 1e-3 && (scan.range_min - 0.01).abs() < 1e-6,
+            "range_min {} range_max {}",
+            scan.range_min,
+            scan.range_max
+        );
+        assert!(scan.ranges.iter().all(|r| (r - 9.5).abs() < 1e-4));
+    }
 }

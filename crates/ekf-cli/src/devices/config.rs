@@ -22,6 +22,9 @@ pub struct DevicesConfig {
     pub base_baud: u32,
     /// Encoder ticks per wheel revolution (after quadrature decoding).
     pub ticks_per_revolution: f64,
+    /// Fastest a wheel can turn (turns per second): a larger encoder change between two
+    /// reads is refused as impossible (a restarted controller, a corrupt read).
+    pub max_wheel_turns_per_s: f64,
     /// Polls of the base controller per second (the filter rate).
     pub poll_rate_hz: f64,
     /// GPS baud rate.
@@ -42,6 +45,7 @@ impl Default for DevicesConfig {
             base_unit_id: 1,
             base_baud: 38_400,
             ticks_per_revolution: 500.0,
+            max_wheel_turns_per_s: 10.0,
             poll_rate_hz: 10.0,
             gps_baud: 4800,
             gps_frame: "gps".into(),

@@ -6,7 +6,7 @@ use crate::devices::gps::device::{no_fix_sentences, sentences};
 use crate::devices::modbus_base::device::{BaseController, BaseState};
 use crate::devices::sick::device::SickScanner;
 use crate::devices::sick::RangeUnit;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 /// What the runner needs from an emulated device.
 pub(crate) trait Emulated: Send + 'static {
@@ -16,6 +16,16 @@ pub(crate) trait Emulated: Send + 'static {
     fn answer(&mut self, bytes: &[u8], sample: Option<&RobotSample>) -> Vec<Vec<u8>>;
     /// Output the device sends by itself when a new sample arrives.
     fn output(&mut self, sample: &RobotSample) -> Option<Vec<u8>>;
+    /// Time from a sample to the moment its output is ready to be sent (the laser: the
+    /// second half of its sweep; the sample is the sweep's middle).
+    fn output_delay(&self) -> Duration {
+        Duration::ZERO
+    }
+    /// Time `bytes` bytes take on the device's line (the laser's; the others are
+    /// delivered at once).
+    fn line_time(&self, _bytes: usize) -> Duration {
+        Duration::ZERO
+    }
     /// Index of a checksum byte in an output (binary protocols: the last byte).
     fn checksum_at(&self, out: &[u8]) -> usize {
         out.len().saturating_sub(1)
@@ -61,6 +71,14 @@ impl Emulated for Laser {
 
     fn host_ready(&self) -> bool {
         self.scanner.is_continuous()
+    }
+
+    fn output_delay(&self) -> Duration {
+        self.scanner.variant().sweep_duration() / 2
+    }
+
+    fn line_time(&self, bytes: usize) -> Duration {
+        self.scanner.baud_rate().transmission_time(bytes)
     }
 
     fn output(&mut self, sample: &RobotSample) -> Option<Vec<u8>> {

@@ -5,6 +5,7 @@ use super::devices::Emulated;
 use super::faults::{Fault, FaultState};
 use super::pty::Pty;
 use super::RobotSample;
+use std::collections::VecDeque;
 use std::io::{self, Read, Write};
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -40,6 +41,8 @@ pub(crate) fn spawn<D: Emulated>(
             sample: None,
             faults: FaultState::default(),
             ready,
+            queue: VecDeque::new(),
+            line_free: Instant::now(),
         }
         .run(pty);
     });
@@ -53,6 +56,11 @@ struct Runner<D> {
     sample: Option<Arc<RobotSample>>,
     faults: FaultState,
     ready: Arc<AtomicBool>,
+    /// Bytes waiting to be written, each when its last byte would have arrived on the
+    /// device's line.
+    queue: VecDeque<(Instant, Vec<u8>)>,
+    /// When the line is done with the queued bytes.
+    line_free: Instant,
 }
 
 /// Why the inner loop ended.
@@ -77,6 +85,7 @@ impl<D: Emulated> Runner<D> {
                         Err(_) => break,
                     }
                     self.device.power_up();
+                    self.queue.clear();
                     self.ready.store(false, Ordering::Relaxed);
                 }
             }
@@ -94,7 +103,9 @@ impl<D: Emulated> Runner<D> {
                         let out = self.device.output(&s);
                         self.sample = Some(s);
                         if let Some(out) = out {
-                            self.send(pty, out);
+                            // Measured now; sent once complete, at the line's pace.
+                            let ready = Instant::now() + self.device.output_delay();
+                            self.send(out, ready);
                         }
                     }
                     Ok(Command::Fault(fault, taken)) => {
@@ -118,25 +129,41 @@ impl<D: Emulated> Runner<D> {
             let n: usize = pty.device.read(&mut buf).unwrap_or_default();
             if n > 0 && !self.faults.silent() {
                 for reply in self.device.answer(&buf[..n], self.sample.as_deref()) {
-                    self.send(pty, reply);
+                    self.send(reply, Instant::now());
                 }
                 self.ready
                     .store(self.device.host_ready(), Ordering::Relaxed);
             }
+            self.write_due(pty);
         }
     }
 
-    fn send(&mut self, pty: &mut Pty, out: Vec<u8>) {
+    /// Queues `out`, ready to go at `ready`, behind what the line still carries: it
+    /// arrives whole when its last byte would have ([`Emulated::line_time`]).
+    fn send(&mut self, out: Vec<u8>, ready: Instant) {
         if self.faults.silent() {
             return;
         }
         let at = self.device.checksum_at(&out);
         let bytes = self.faults.apply(out, at);
-        // Nobody listening (the host not connected) is not the device's problem.
-        let _ = pty
-            .device
-            .write_all(&bytes)
-            .and_then(|()| pty.device.flush());
+        let due = ready.max(self.line_free) + self.device.line_time(bytes.len());
+        self.line_free = due;
+        self.queue.push_back((due, bytes));
+    }
+
+    /// Writes the queued bytes that are due.
+    fn write_due(&mut self, pty: &mut Pty) {
+        let now = Instant::now();
+        while self.queue.front().is_some_and(|(due, _)| *due <= now) {
+            let Some((_, bytes)) = self.queue.pop_front() else {
+                break;
+            };
+            // Nobody listening (the host not connected) is not the device's problem.
+            let _ = pty
+                .device
+                .write_all(&bytes)
+                .and_then(|()| pty.device.flush());
+        }
     }
 
     /// Waits `duration` while unplugged, keeping the latest sample; `false` on stop.

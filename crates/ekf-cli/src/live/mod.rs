@@ -9,7 +9,7 @@ mod workers;
 
 use crate::config::{Config, MotionSource};
 use crate::devices::modbus_base::{BaseConfig, EncoderTracker};
-use crate::devices::sick::{BaudRate, RangeUnit, SickConfig, Variant};
+use crate::devices::sick::{BaudRate, SickConfig, Variant};
 use crate::devices::DeviceError;
 use crate::replay::{Mode, Preamble, ReplayError, ReplayOptions, ReplaySummary, Run};
 use crate::ros2::builtin_interfaces::Time;
@@ -18,13 +18,13 @@ use crate::ros2::std_msgs::Header;
 use ekf_core::Pose2;
 use messages::{RecordError, Recorder};
 use nalgebra::Matrix3;
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{self, RecvTimeoutError};
 use std::sync::Arc;
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
-use workers::{DeviceCounters, Reading};
+use workers::{Data, DeviceCounters, Reading};
 
 /// Topic of the device diagnostics in a recording.
 pub const DEVICE_DIAGNOSTICS_TOPIC: &str = "/diagnostics";
@@ -84,10 +84,15 @@ pub struct LiveSummary {
     pub base_repeated_samples: u64,
     /// Base samples whose replies were lost (counter jumps).
     pub base_missed_samples: u64,
+    /// Base reads refused: an encoder change no wheel can make in the time, or a
+    /// sample counter that stepped back (the controller restarted its counts).
+    pub base_implausible_samples: u64,
     /// Compass bearings out of range (not fused).
     pub compass_invalid: u64,
     /// GPS fixes recorded.
     pub gps_fixes: u64,
+    /// Measurements that arrived after a later one had been fused: dropped.
+    pub late_readings: u64,
     /// The recording, if any.
     pub recording: Option<String>,
 }
@@ -119,8 +124,12 @@ pub struct LiveOutcome {
     pub failure: Option<LiveError>,
 }
 
-/// Nanoseconds since the Unix epoch from a monotonic clock, strictly increasing per
-/// call (so messages of different devices never share a stamp).
+/// How much longer than a device's announced latency a measurement is held before the
+/// measurements made up to then are fused: covers a worker thread descheduled between
+/// stamping a measurement and handing it over.
+const HOLD_SLACK: Duration = Duration::from_millis(100);
+
+/// Nanoseconds since the Unix epoch for monotonic instants.
 struct Clock {
     epoch_ns: u64,
     started: Instant,
@@ -139,9 +148,14 @@ impl Clock {
         }
     }
 
+    /// The stamp of `t` (instants before the clock started get its start).
+    fn stamp(&self, t: Instant) -> u64 {
+        self.epoch_ns + t.saturating_duration_since(self.started).as_nanos() as u64
+    }
+
+    /// The stamp of now, strictly increasing per call (diagnostics).
     fn now(&mut self) -> u64 {
-        let t = self.epoch_ns + self.started.elapsed().as_nanos() as u64;
-        self.last = t.max(self.last + 1);
+        self.last = self.stamp(Instant::now()).max(self.last + 1);
         self.last
     }
 }
@@ -187,15 +201,22 @@ pub fn run(
                 d.laser_baud
             ))
         })?;
-    if !(d.timeout_s > 0.0 && d.poll_rate_hz > 0.0 && d.ticks_per_revolution > 0.0) {
+    if !(d.timeout_s > 0.0
+        && d.poll_rate_hz > 0.0
+        && d.ticks_per_revolution > 0.0
+        && d.max_wheel_turns_per_s > 0.0)
+    {
         return Err(LiveError::Config(
-            "devices.timeout_s, devices.poll_rate_hz and devices.ticks_per_revolution must be > 0"
+            "devices.timeout_s, devices.poll_rate_hz, devices.ticks_per_revolution and devices.max_wheel_turns_per_s must be > 0"
                 .into(),
         ));
     }
     let timeout = Duration::from_secs_f64(d.timeout_s);
+    // Before the workers: every measurement is made after the recording's start.
+    let clock = Clock::new();
 
-    // Devices first: a silent device ends the run before anything is written.
+    // The devices connect while the recording starts; a device silent at start-up ends
+    // the run (the recording then holds only its start).
     let (tx, rx) = mpsc::channel();
     let worker_stop = Arc::new(AtomicBool::new(false));
     let mut threads = vec![
@@ -244,44 +265,85 @@ pub fn run(
         }
     };
 
-    let mut live = Live::new(config, options, variant)?;
-    let mut connected = 0;
-    let expected = threads.len();
+    let mut live = match Live::new(config, options, variant, clock) {
+        Ok(live) => live,
+        Err(e) => {
+            // The laser must not be left streaming.
+            shutdown(threads);
+            return Err(e);
+        }
+    };
+    // Devices that have connected once: a further OK from one is a reconnection.
+    let mut connected: BTreeSet<&'static str> = BTreeSet::new();
     let mut failure = None;
     let mut last_diagnostics = Instant::now();
+    // Until the laser says at which rate it runs: the configured one.
+    let mut latency: BTreeMap<&'static str, Duration> = BTreeMap::from([(
+        "laser",
+        laser_baud.transmission_time(variant.telegram_bytes()) + variant.sweep_duration() / 2,
+    )]);
+    live.hold = latency.values().max().copied().unwrap_or_default() + HOLD_SLACK;
     while !stop.load(Ordering::Relaxed) {
-        let reading = match rx.recv_timeout(Duration::from_millis(50)) {
-            Ok(r) => r,
-            Err(RecvTimeoutError::Timeout) => continue,
+        let first = match rx.recv_timeout(Duration::from_millis(50)) {
+            Ok(r) => Some(r),
+            Err(RecvTimeoutError::Timeout) => None,
             Err(RecvTimeoutError::Disconnected) => break,
         };
-        let step = match reading {
-            Reading::Failed(e) => {
-                // Only a start-up failure gets here (later ones are retried); the
-                // recording is finished when `live` is dropped.
-                shutdown(threads);
-                return Err(e.into());
-            }
-            Reading::Status {
-                device,
-                level,
-                text,
-            } => {
-                if level == workers::OK {
-                    connected += 1;
-                    if connected > expected {
-                        *live.summary.reconnects.entry(device).or_default() += 1;
-                    }
+        let mut step = Ok(());
+        // Everything that is waiting; then the channel is empty.
+        for reading in first
+            .into_iter()
+            .chain(std::iter::from_fn(|| rx.try_recv().ok()))
+        {
+            step = match reading {
+                Reading::Failed(e) => {
+                    // Only a start-up failure gets here (later ones are retried); the
+                    // recording is finished when `live` is dropped.
+                    shutdown(threads);
+                    return Err(e.into());
                 }
-                on_event(LiveEvent::Device {
+                Reading::Status {
                     device,
                     level,
-                    text: text.clone(),
-                });
-                live.device_status(device, level, &text)
+                    text,
+                    latency: l,
+                } => {
+                    if level == workers::OK {
+                        if !connected.insert(device) {
+                            *live.summary.reconnects.entry(device).or_default() += 1;
+                        }
+                        latency.insert(device, l);
+                        live.hold =
+                            latency.values().max().copied().unwrap_or_default() + HOLD_SLACK;
+                    }
+                    on_event(LiveEvent::Device {
+                        device,
+                        level,
+                        text: text.clone(),
+                    });
+                    live.device_status(device, level, &text)
+                }
+                Reading::Counters(c) => {
+                    live.counters(c);
+                    Ok(())
+                }
+                Reading::Data { at, data } => {
+                    live.hold_back(at, data);
+                    Ok(())
+                }
+            };
+            if step.is_err() {
+                break;
             }
-            other => live.reading(other, on_event),
-        };
+        }
+        // A measurement not yet handed over is made after `drained` less the
+        // latency of its device: what was made before that can be fused, in order.
+        let drained = Instant::now();
+        if step.is_ok() {
+            if let Some(until) = drained.checked_sub(live.hold) {
+                step = live.release(Some(until), on_event);
+            }
+        }
         if let Err(e) = step {
             failure = Some(e);
             break;
@@ -295,6 +357,10 @@ pub fn run(
         }
     }
     shutdown(threads);
+    // What was still held back.
+    if let Err(e) = live.release(None, on_event) {
+        failure.get_or_insert(e);
+    }
     let _ = live.counters_diagnostics();
     live.finish(started, failure)
 }
@@ -306,16 +372,30 @@ struct Live<'a> {
     recorder: Recorder,
     clock: Clock,
     tracker: EncoderTracker,
+    /// The base worker's connection the tracker follows.
+    base_connection: u64,
     variant: Variant,
-    unit: RangeUnit,
     counters: BTreeMap<&'static str, DeviceCounters>,
     summary: LiveSummary,
+    /// Measurements held back until none made before them can still arrive, in the
+    /// order they were made (ties in the order they came).
+    pending: BTreeMap<(Instant, u64), Data>,
+    arrived: u64,
+    /// How long after a measurement the ones made before it have all arrived: the
+    /// largest device latency, plus [`HOLD_SLACK`].
+    hold: Duration,
+    /// Stamp of the last message fused (at first the recording's start).
+    last_ns: u64,
 }
 
 impl<'a> Live<'a> {
-    fn new(config: &'a Config, options: &LiveOptions, variant: Variant) -> Result<Self, LiveError> {
-        let mut clock = Clock::new();
-        let t0 = clock.now();
+    fn new(
+        config: &'a Config,
+        options: &LiveOptions,
+        variant: Variant,
+        clock: Clock,
+    ) -> Result<Self, LiveError> {
+        let t0 = clock.stamp(clock.started);
         let tf = messages::laser_transform(config, t0);
         let preamble = Preamble {
             scan_frame: Some(config.devices.laser_frame.clone()),
@@ -350,10 +430,11 @@ impl<'a> Live<'a> {
             run,
             recorder,
             clock,
-            tracker: EncoderTracker::default(),
+            tracker: EncoderTracker::new(
+                config.devices.max_wheel_turns_per_s * config.devices.ticks_per_revolution,
+            ),
+            base_connection: 0,
             variant,
-            // Ranges arrive in metres; the unit only sets range_min/range_max.
-            unit: RangeUnit::Millimetres,
             counters: BTreeMap::new(),
             summary: LiveSummary {
                 filter: ReplaySummary::default(),
@@ -361,30 +442,90 @@ impl<'a> Live<'a> {
                 reconnects: BTreeMap::new(),
                 base_repeated_samples: 0,
                 base_missed_samples: 0,
+                base_implausible_samples: 0,
                 compass_invalid: 0,
                 gps_fixes: 0,
+                late_readings: 0,
                 recording: options.record.as_ref().map(|p| p.display().to_string()),
             },
+            pending: BTreeMap::new(),
+            arrived: 0,
+            hold: HOLD_SLACK,
+            last_ns: t0,
         })
+    }
+
+    fn counters(&mut self, c: DeviceCounters) {
+        let name = match c {
+            DeviceCounters::Laser(_) => "laser",
+            DeviceCounters::Base(_) => "base",
+            DeviceCounters::Gps(_) => "gps",
+        };
+        self.counters.insert(name, c);
+    }
+
+    /// Holds a measurement made at `at` back until those made before it have arrived;
+    /// one made before a measurement already fused is late: counted and dropped (fusing
+    /// or recording it out of order would make the replay differ).
+    fn hold_back(&mut self, at: Instant, data: Data) {
+        if self.clock.stamp(at) < self.last_ns {
+            self.summary.late_readings += 1;
+            return;
+        }
+        self.pending.insert((at, self.arrived), data);
+        self.arrived += 1;
+    }
+
+    /// Fuses the held measurements made up to `until` (all with `None`), oldest first.
+    fn release(
+        &mut self,
+        until: Option<Instant>,
+        on_event: &mut dyn FnMut(LiveEvent),
+    ) -> Result<(), LiveError> {
+        while let Some(entry) = self.pending.first_entry() {
+            let at = entry.key().0;
+            if until.is_some_and(|u| at > u) {
+                break;
+            }
+            let data = entry.remove();
+            self.reading(at, data, on_event)?;
+        }
+        Ok(())
+    }
+
+    /// The stamp of a message about a measurement made at `at`: strictly after the last
+    /// one (messages never share a stamp, and the recording's order is the stamps').
+    fn stamp(&mut self, at: Instant) -> u64 {
+        self.last_ns = self.clock.stamp(at).max(self.last_ns + 1);
+        self.last_ns
     }
 
     fn reading(
         &mut self,
-        reading: Reading,
+        at: Instant,
+        data: Data,
         on_event: &mut dyn FnMut(LiveEvent),
     ) -> Result<(), LiveError> {
         let topics = &self.config.topics;
-        match reading {
-            Reading::Scan(ranges) => {
-                let t = self.clock.now();
-                let scan = messages::laser_scan(self.config, self.variant, self.unit, t, ranges);
+        match data {
+            Data::Scan { ranges, unit } => {
+                let t = self.stamp(at);
+                let scan = messages::laser_scan(self.config, self.variant, unit, t, ranges);
                 self.feed(&topics.scan.clone(), &scan)?;
             }
-            Reading::Base(r) => {
-                let Some(ticks) = self.tracker.update(r) else {
+            Data::Base {
+                reading: r,
+                connection,
+            } => {
+                if connection != self.base_connection {
+                    // A power-cycled controller restarts its counts and counter at 0.
+                    self.tracker.restart();
+                    self.base_connection = connection;
+                }
+                let Some(ticks) = self.tracker.update(r, self.clock.stamp(at)) else {
                     return Ok(());
                 };
-                let t = self.clock.now();
+                let t = self.stamp(at);
                 let joints = messages::joint_state(self.config, t, ticks);
                 self.feed(&topics.joint_states.clone(), &joints)?;
                 let pose = self.run.localizer().pose();
@@ -396,28 +537,19 @@ impl<'a> Live<'a> {
                 });
                 match r.bearing() {
                     Some(bearing) => {
-                        let t = self.clock.now();
+                        let t = self.stamp(at);
                         let field = messages::compass(self.config, t, bearing);
                         self.feed(&topics.compass.clone(), &field)?;
                     }
                     None => self.summary.compass_invalid += 1,
                 }
             }
-            Reading::Fix(f) => {
-                let t = self.clock.now();
+            Data::Fix(f) => {
+                let t = self.stamp(at);
                 let fix = f.to_nav_sat_fix(t, &self.config.devices.gps_frame);
                 self.summary.gps_fixes += 1;
                 self.feed(FIX_TOPIC, &fix)?;
             }
-            Reading::Counters(c) => {
-                let name = match c {
-                    DeviceCounters::Laser(_) => "laser",
-                    DeviceCounters::Base(_) => "base",
-                    DeviceCounters::Gps(_) => "gps",
-                };
-                self.counters.insert(name, c);
-            }
-            Reading::Status { .. } | Reading::Failed(_) => {}
         }
         Ok(())
     }
@@ -441,6 +573,7 @@ impl<'a> Live<'a> {
     fn counters_diagnostics(&mut self) -> Result<(), LiveError> {
         self.summary.base_repeated_samples = self.tracker.repeated;
         self.summary.base_missed_samples = self.tracker.missed;
+        self.summary.base_implausible_samples = self.tracker.implausible;
         let statuses = self
             .counters
             .iter()
@@ -487,6 +620,7 @@ impl<'a> Live<'a> {
     ) -> Result<LiveOutcome, LiveError> {
         self.summary.base_repeated_samples = self.tracker.repeated;
         self.summary.base_missed_samples = self.tracker.missed;
+        self.summary.base_implausible_samples = self.tracker.implausible;
         let outcome = self.run.finish(started, None)?;
         self.summary.filter = outcome.summary;
         self.summary.devices = self

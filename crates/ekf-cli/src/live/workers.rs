@@ -4,7 +4,7 @@
 
 use crate::devices::gps::{Fix, NmeaCounters, NmeaReader, Sentence};
 use crate::devices::modbus_base::{BaseClient, BaseConfig, BaseCounters, BaseReading};
-use crate::devices::sick::{SickConfig, SickCounters, SickLaser};
+use crate::devices::sick::{RangeUnit, SickConfig, SickCounters, SickLaser};
 use crate::devices::{DeviceError, Link, SerialLink};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::Sender;
@@ -23,14 +23,38 @@ pub(crate) const OK: u8 = 0;
 /// Something is wrong but the run goes on.
 pub(crate) const WARN: u8 = 1;
 
-/// What a device thread hands to the main loop.
-pub(crate) enum Reading {
-    /// A laser scan: ranges (m) of the configured variant.
-    Scan(Vec<f32>),
-    /// A read of the base controller's registers.
-    Base(BaseReading),
+/// A device's measurement.
+pub(crate) enum Data {
+    /// A laser scan of the configured variant.
+    Scan {
+        /// Ranges (m).
+        ranges: Vec<f32>,
+        /// The unit the scanner sent them in (bits 14-15 of the count word): it sets
+        /// the scan's range limits.
+        unit: RangeUnit,
+    },
+    /// A read of the base controller's registers, with the number of the connection it
+    /// came over (a reconnected controller may have restarted its counts).
+    Base {
+        /// The registers.
+        reading: BaseReading,
+        /// 0 for the first connection, +1 for each reconnection.
+        connection: u64,
+    },
     /// A GPS fix.
     Fix(Fix),
+}
+
+/// What a device thread hands to the main loop.
+pub(crate) enum Reading {
+    /// A measurement, and when it was made: the laser's sweep, the base's or the GPS's
+    /// reply as the worker received it (not when the main loop gets to it).
+    Data {
+        /// When.
+        at: Instant,
+        /// What.
+        data: Data,
+    },
     /// The device's state changed (connected, lost, reconnected).
     Status {
         /// `laser`, `base` or `gps`.
@@ -39,6 +63,9 @@ pub(crate) enum Reading {
         level: u8,
         /// What happened.
         text: String,
+        /// With OK: the longest time from a measurement to its reception on this
+        /// connection (the laser's telegram on the line).
+        latency: Duration,
     },
     /// The device's counters since its last (re)connection.
     Counters(DeviceCounters),
@@ -66,12 +93,16 @@ pub(crate) trait LiveDevice: Sized {
     type Settings: Send + 'static;
     /// Opens the port and brings the device up; a silent device is an error.
     fn connect(port: &str, settings: &Self::Settings) -> Result<Self, DeviceError>;
-    /// Reads the next readings into `out`.
-    fn next(&mut self, out: &mut Vec<Reading>) -> Result<(), DeviceError>;
+    /// Reads the next readings into `out`; `connection` counts reconnections.
+    fn next(&mut self, out: &mut Vec<Reading>, connection: u64) -> Result<(), DeviceError>;
     /// Counts so far.
     fn counters(&self) -> DeviceCounters;
     /// A line about the connection, e.g. the baud rate.
     fn describe(&self) -> String;
+    /// The longest time from a measurement to its reception.
+    fn latency(&self) -> Duration {
+        Duration::ZERO
+    }
     /// Leaves the device as it should be left (the laser stops its output).
     fn close(self) {}
 }
@@ -87,10 +118,21 @@ pub(crate) fn spawn<D: LiveDevice + 'static>(
 }
 
 fn status(tx: &Sender<Reading>, device: &'static str, level: u8, text: String) {
+    connected(tx, device, level, text, Duration::ZERO);
+}
+
+fn connected(
+    tx: &Sender<Reading>,
+    device: &'static str,
+    level: u8,
+    text: String,
+    latency: Duration,
+) {
     let _ = tx.send(Reading::Status {
         device,
         level,
         text,
+        latency,
     });
 }
 
@@ -107,19 +149,21 @@ fn work<D: LiveDevice>(
             return;
         }
     };
-    status(
+    connected(
         tx,
         D::NAME,
         OK,
         format!("{} on {port}: {}", D::NAME, device.describe()),
+        device.latency(),
     );
     let mut out = Vec::new();
+    let mut connection = 0;
     loop {
         if stop.load(Ordering::Relaxed) {
             device.close();
             return;
         }
-        let step = device.next(&mut out);
+        let step = device.next(&mut out, connection);
         for r in out.drain(..) {
             if tx.send(r).is_err() {
                 return;
@@ -130,7 +174,10 @@ fn work<D: LiveDevice>(
             status(tx, D::NAME, WARN, format!("{e}; reconnecting"));
             drop(device);
             match reconnect::<D>(port, settings, tx, stop) {
-                Some(d) => device = d,
+                Some(d) => {
+                    device = d;
+                    connection += 1;
+                }
                 None => return,
             }
         }
@@ -155,11 +202,12 @@ fn reconnect<D: LiveDevice>(
         }
         match D::connect(port, settings) {
             Ok(d) => {
-                status(
+                connected(
                     tx,
                     D::NAME,
                     OK,
                     format!("{} on {port}: back: {}", D::NAME, d.describe()),
+                    d.latency(),
                 );
                 return Some(d);
             }
@@ -188,10 +236,20 @@ impl LiveDevice for Laser {
         SickLaser::connect(link, *settings).map(Laser)
     }
 
-    fn next(&mut self, out: &mut Vec<Reading>) -> Result<(), DeviceError> {
+    fn next(&mut self, out: &mut Vec<Reading>, _: u64) -> Result<(), DeviceError> {
         let scan = self.0.next_scan()?;
-        out.push(Reading::Scan(scan.ranges()));
+        out.push(Reading::Data {
+            at: scan.measured,
+            data: Data::Scan {
+                ranges: scan.values.ranges(),
+                unit: scan.values.unit,
+            },
+        });
         Ok(())
+    }
+
+    fn latency(&self) -> Duration {
+        self.0.latency()
     }
 
     fn counters(&self) -> DeviceCounters {
@@ -246,7 +304,7 @@ impl LiveDevice for Base {
         })
     }
 
-    fn next(&mut self, out: &mut Vec<Reading>) -> Result<(), DeviceError> {
+    fn next(&mut self, out: &mut Vec<Reading>, connection: u64) -> Result<(), DeviceError> {
         let now = Instant::now();
         if self.next_poll > now {
             std::thread::sleep(self.next_poll - now);
@@ -256,8 +314,14 @@ impl LiveDevice for Base {
             // Fell behind (a slow reply): poll on from now rather than in a burst.
             self.next_poll = Instant::now() + self.period;
         }
-        if let Some(r) = self.client.poll()? {
-            out.push(Reading::Base(r));
+        if let Some(reading) = self.client.poll()? {
+            out.push(Reading::Data {
+                at: Instant::now(),
+                data: Data::Base {
+                    reading,
+                    connection,
+                },
+            });
         }
         Ok(())
     }
@@ -304,11 +368,15 @@ impl Gps {
                 during: "reading",
                 source,
             })?;
+        let at = Instant::now();
         let mut valid = false;
         for s in self.reader.push(&buf[..n]) {
             match s {
                 Sentence::Fix(f) => {
-                    out.push(Reading::Fix(f));
+                    out.push(Reading::Data {
+                        at,
+                        data: Data::Fix(f),
+                    });
                     valid = true;
                 }
                 Sentence::NoFix | Sentence::Other => valid = true,
@@ -348,7 +416,7 @@ impl LiveDevice for Gps {
         Ok(gps)
     }
 
-    fn next(&mut self, out: &mut Vec<Reading>) -> Result<(), DeviceError> {
+    fn next(&mut self, out: &mut Vec<Reading>, _: u64) -> Result<(), DeviceError> {
         self.read(out).map(|_| ())
     }
 

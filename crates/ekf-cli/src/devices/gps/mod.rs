@@ -102,6 +102,9 @@ pub struct NmeaReader {
     pub counters: NmeaCounters,
     /// Whether GGA sentences arrive: RMC fixes are then not used (GGA has altitude).
     seen_gga: bool,
+    /// The UTC time field (`hhmmss.ss`) of the last fix delivered: one fix per epoch,
+    /// also when an RMC comes before the first GGA.
+    last_epoch: Option<String>,
 }
 
 impl NmeaReader {
@@ -116,6 +119,10 @@ impl NmeaReader {
         for &b in bytes {
             if b == b'\n' {
                 let line = std::mem::take(&mut self.line);
+                if !self.overlong && line.iter().all(|c| *c == b'\r') {
+                    // An empty line is no sentence: it does not show a receiver is there.
+                    continue;
+                }
                 let sentence = if std::mem::take(&mut self.overlong) {
                     Sentence::Invalid(format!("line longer than {MAX_LINE} bytes"))
                 } else {
@@ -142,9 +149,20 @@ impl NmeaReader {
             return Sentence::Invalid("not ASCII".into());
         };
         let text = text.trim_end_matches('\r');
-        if text.is_empty() {
+        let sentence = self.parse_sentence(text);
+        let Sentence::Fix(_) = sentence else {
+            return sentence;
+        };
+        // The time field: the second field of GGA and RMC.
+        let epoch = text.split(',').nth(1).unwrap_or_default();
+        if !epoch.is_empty() && self.last_epoch.as_deref() == Some(epoch) {
             return Sentence::Other;
         }
+        self.last_epoch = Some(epoch.to_owned());
+        sentence
+    }
+
+    fn parse_sentence(&mut self, text: &str) -> Sentence {
         match nmea::parse_str(text) {
             Ok(ParseResult::GGA(gga)) => {
                 self.seen_gga = true;
@@ -215,10 +233,35 @@ mod tests {
         r.push(b"\n");
         assert_eq!(r.counters.no_fix, 1);
         assert_eq!(r.counters.invalid, 2);
-        let Sentence::Fix(f) = r.push(good.as_bytes())[0] else {
+        // (The RMC after the damaged GGA gave that epoch's fix: the next epoch's GGA.)
+        let next = sentences(-33.5, -70.25, 500.0, 0.9, 1.0);
+        let Sentence::Fix(f) = r.push(next.as_bytes())[0] else {
             panic!("a good GGA after the noise must parse");
         };
         assert!((f.latitude + 33.5).abs() < 1e-6 && (f.longitude + 70.25).abs() < 1e-6);
+    }
+
+    #[test]
+    fn one_fix_per_epoch_and_empty_lines_are_no_sentences() {
+        let mut r = NmeaReader::new();
+        // The stream starts with an epoch's RMC; its GGA follows.
+        let epoch = sentences(21.0380, 105.7827, 12.5, 1.2, 3723.5);
+        let (gga, rmc) = epoch.split_at(epoch.find("$GPRMC").unwrap());
+        let mut found = r.push(rmc.as_bytes());
+        found.extend(r.push(gga.as_bytes()));
+        let fixes = found
+            .iter()
+            .filter(|s| matches!(s, Sentence::Fix(_)))
+            .count();
+        assert_eq!(fixes, 1, "{found:?}");
+        // The next epochs: one fix each, the GGA's.
+        let next = sentences(21.0381, 105.7827, 12.5, 1.2, 3724.5);
+        let found = r.push(next.as_bytes());
+        assert!(matches!(found[0], Sentence::Fix(f) if f.altitude == Some(12.5)));
+        assert_eq!(found[1], Sentence::Other);
+        assert_eq!(r.counters.fixes, 2);
+        // Line ends alone say nothing.
+        assert!(r.push(b"\r\n\n\r\n").is_empty());
     }
 
     #[test]

@@ -47,6 +47,8 @@ pub struct BaseCounters {
     pub exceptions: u64,
     /// Bytes that were not part of a reply.
     pub garbage_bytes: u64,
+    /// Echoes of our own request skipped (RS-485 adapters that hear themselves).
+    pub echoes: u64,
 }
 
 /// Why one poll gave no reading (counted; the caller polls again).
@@ -161,6 +163,9 @@ impl<L: Link> BaseClient<L> {
         self.counters.polls += 1;
         let deadline = Instant::now() + self.config.reply_timeout;
         let mut buf: Vec<u8> = Vec::new();
+        // The first candidate that failed to parse: what the poll reports if no valid
+        // reply follows.
+        let mut fault = None;
         loop {
             // Resynchronise on the unit id: RTU has no start byte.
             if let Some(skip) = buf.iter().position(|b| *b == self.config.unit_id) {
@@ -170,21 +175,50 @@ impl<L: Link> BaseClient<L> {
                 self.counters.garbage_bytes += buf.len() as u64;
                 buf.clear();
             }
-            if let Ok(len) = guess_response_frame_len(&buf, ModbusProto::Rtu) {
-                let len = usize::from(len);
-                if buf.len() >= len {
-                    self.counters.garbage_bytes += (buf.len() - len) as u64;
-                    return Ok(parse_reply(&request, &buf[..len]));
-                }
-            } else if buf.len() >= 3 {
-                // Not a reply to a register read: drop this unit-id byte and look again.
-                self.counters.garbage_bytes += 1;
-                buf.remove(0);
+            if buf.starts_with(&frame) {
+                // Our own request, echoed by the adapter.
+                self.counters.echoes += 1;
+                buf.drain(..frame.len());
                 continue;
+            }
+            // A beginning of an echo waits for the rest (a reply differs by byte 2).
+            let echo_so_far = buf.len() < frame.len() && frame.starts_with(&buf);
+            match guess_response_frame_len(&buf, ModbusProto::Rtu) {
+                _ if echo_so_far => {}
+                Ok(len) if buf.len() >= usize::from(len) => {
+                    let len = usize::from(len);
+                    match parse_reply(&request, &buf[..len]) {
+                        Ok(reading) => {
+                            self.counters.garbage_bytes += (buf.len() - len) as u64;
+                            return Ok(Ok(reading));
+                        }
+                        // A reply with a valid CRC that says no.
+                        Err(e @ PollFault::Exception(_)) => {
+                            self.counters.garbage_bytes += (buf.len() - len) as u64;
+                            return Ok(Err(e));
+                        }
+                        // A false start (a unit-id byte in noise) or a damaged reply:
+                        // drop one byte and look on for a valid reply until the deadline.
+                        Err(e) => {
+                            fault.get_or_insert(e);
+                            self.counters.garbage_bytes += 1;
+                            buf.remove(0);
+                            continue;
+                        }
+                    }
+                }
+                Ok(_) => {}
+                Err(_) if buf.len() >= 3 => {
+                    // Not a reply to a register read: drop this unit-id byte and look again.
+                    self.counters.garbage_bytes += 1;
+                    buf.remove(0);
+                    continue;
+                }
+                Err(_) => {}
             }
             if Instant::now() >= deadline {
                 self.counters.garbage_bytes += buf.len() as u64;
-                return Ok(Err(PollFault::Timeout));
+                return Ok(Err(fault.unwrap_or(PollFault::Timeout)));
             }
             let mut chunk = [0u8; 256];
             let n = self

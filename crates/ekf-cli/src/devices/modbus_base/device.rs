@@ -130,6 +130,10 @@ mod tests {
         state: BaseState,
         to_host: VecDeque<u8>,
         plan: VecDeque<Reply>,
+        /// The adapter echoes what the host sends (RS-485).
+        echo: bool,
+        /// Bytes on the line before each reply.
+        noise: Vec<u8>,
     }
 
     impl Link for Wire {
@@ -142,6 +146,10 @@ mod tests {
         }
         fn write_all_bytes(&mut self, bytes: &[u8]) -> io::Result<()> {
             let plan = self.plan.pop_front().unwrap_or(Reply::Normal);
+            if self.echo {
+                self.to_host.extend(bytes);
+            }
+            self.to_host.extend(self.noise.iter().copied());
             if plan == Reply::Exception {
                 self.controller.fail_next(0x04);
             }
@@ -176,6 +184,8 @@ mod tests {
             },
             to_host: VecDeque::new(),
             plan: VecDeque::from([Reply::Normal, Reply::Exception, Reply::Corrupt]),
+            echo: false,
+            noise: Vec::new(),
         };
         let config = BaseConfig {
             reply_timeout: std::time::Duration::from_millis(20),
@@ -195,5 +205,39 @@ mod tests {
         assert_eq!(client.poll().unwrap().unwrap().counter, 4);
         let c = client.counters();
         assert_eq!((c.polls, c.replies, c.exceptions, c.bad_crc), (4, 2, 1, 1));
+    }
+
+    #[test]
+    fn echoes_and_false_starts_do_not_cost_the_reply() {
+        // An adapter that echoes the request, then noise holding a false start: unit 1,
+        // function 04, byte count 2 and two bytes of "CRC" - a 7-byte frame that fails.
+        let wire = Wire {
+            controller: BaseController::new(1),
+            state: BaseState {
+                left_ticks: 12,
+                right_ticks: 34,
+                bearing_tenths: 56,
+            },
+            to_host: VecDeque::new(),
+            plan: VecDeque::from([Reply::Normal, Reply::Corrupt]),
+            echo: true,
+            noise: vec![0x55, 0x01, 0x04, 0x02, 0xaa, 0xbb, 0xcc, 0xdd],
+        };
+        let config = BaseConfig {
+            reply_timeout: std::time::Duration::from_millis(20),
+            ..BaseConfig::default()
+        };
+        let mut client = BaseClient::new(wire, config);
+        let r = client.poll().unwrap().unwrap();
+        assert_eq!(
+            (r.left_ticks, r.right_ticks, r.bearing_tenths),
+            (12, 34, 56)
+        );
+        // A damaged reply after the same noise is still reported as such.
+        assert_eq!(client.poll().unwrap(), None);
+        assert_eq!(client.last_fault(), Some(&PollFault::BadCrc));
+        let c = client.counters();
+        assert_eq!((c.replies, c.echoes, c.bad_crc), (1, 2, 1), "{c:?}");
+        assert!(c.garbage_bytes >= 16, "{c:?}");
     }
 }

@@ -1,5 +1,6 @@
 //! Cumulative wheel ticks from successive register reads: 32-bit counters unwrapped
-//! (wrapping differences), repeated samples skipped, missed samples counted.
+//! (wrapping differences), repeated samples skipped, missed samples counted, and changes
+//! no wheel can make (a controller that restarted its counts) refused.
 
 use super::BaseReading;
 
@@ -13,41 +14,69 @@ pub struct WheelTicks {
 }
 
 /// Follows the encoder counts across reads.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone)]
 pub struct EncoderTracker {
-    last: Option<BaseReading>,
-    totals: Option<WheelTicks>,
+    /// The reference read and its time (ns).
+    last: Option<(BaseReading, u64)>,
+    totals: WheelTicks,
+    max_ticks_per_s: f64,
     /// Reads that repeated the previous sample (counter unchanged).
     pub repeated: u64,
     /// Samples the controller latched whose replies never arrived (counter jumps).
     pub missed: u64,
+    /// Reads refused: an encoder changed by more than a wheel can turn in the time, or
+    /// the sample counter stepped back (the controller restarted).
+    pub implausible: u64,
 }
 
 impl EncoderTracker {
-    /// The wheel positions after this read, or `None` if it repeats the last sample.
-    /// Differences are taken modulo 2³² (a counter that wraps between reads moves by
-    /// less than 2³¹ ticks).
-    pub fn update(&mut self, reading: BaseReading) -> Option<WheelTicks> {
-        let totals = match (self.last, self.totals) {
-            (Some(last), Some(t)) => {
-                let jump = reading.counter.wrapping_sub(last.counter);
-                if jump == 0 {
-                    self.repeated += 1;
-                    return None;
-                }
-                self.missed += u64::from(jump - 1);
-                WheelTicks {
-                    left: t.left
-                        + i64::from(reading.left_ticks.wrapping_sub(last.left_ticks) as i32),
-                    right: t.right
-                        + i64::from(reading.right_ticks.wrapping_sub(last.right_ticks) as i32),
-                }
-            }
-            _ => WheelTicks { left: 0, right: 0 },
+    /// A tracker for wheels that turn at most `max_ticks_per_s` ticks per second.
+    pub fn new(max_ticks_per_s: f64) -> Self {
+        Self {
+            last: None,
+            totals: WheelTicks { left: 0, right: 0 },
+            max_ticks_per_s,
+            repeated: 0,
+            missed: 0,
+            implausible: 0,
+        }
+    }
+
+    /// The controller was (re)connected: its counts and sample counter may have
+    /// restarted, so the next read is a new reference; the positions carry on from
+    /// where they were (the motion while it was away is lost).
+    pub fn restart(&mut self) {
+        self.last = None;
+    }
+
+    /// The wheel positions after this read at `t_ns`, or `None` if it repeats the last
+    /// sample or is refused. Differences are taken modulo 2³² (a counter that wraps
+    /// between reads moves by less than 2³¹ ticks). A change larger than the wheels can
+    /// make since the reference read, or a sample counter that steps back, is refused and
+    /// counted; the read becomes the new reference (the controller restarted its counts).
+    pub fn update(&mut self, reading: BaseReading, t_ns: u64) -> Option<WheelTicks> {
+        let Some((last, last_ns)) = self.last else {
+            self.last = Some((reading, t_ns));
+            return Some(self.totals);
         };
-        self.last = Some(reading);
-        self.totals = Some(totals);
-        Some(totals)
+        let jump = reading.counter.wrapping_sub(last.counter);
+        if jump == 0 {
+            self.repeated += 1;
+            return None;
+        }
+        let left = i64::from(reading.left_ticks.wrapping_sub(last.left_ticks) as i32);
+        let right = i64::from(reading.right_ticks.wrapping_sub(last.right_ticks) as i32);
+        // One tick of slack each way: the counts are whole ticks.
+        let possible = self.max_ticks_per_s * t_ns.saturating_sub(last_ns) as f64 * 1e-9 + 2.0;
+        self.last = Some((reading, t_ns));
+        if jump >= 0x8000 || left.abs() as f64 > possible || right.abs() as f64 > possible {
+            self.implausible += 1;
+            return None;
+        }
+        self.missed += u64::from(jump - 1);
+        self.totals.left += left;
+        self.totals.right += right;
+        Some(self.totals)
     }
 }
 
@@ -64,31 +93,72 @@ mod tests {
         }
     }
 
+    const S: u64 = 1_000_000_000;
+
     #[test]
     fn wrap_around_repeats_and_misses() {
-        let mut t = EncoderTracker::default();
+        let mut t = EncoderTracker::new(1000.0);
         assert_eq!(
-            t.update(read(u32::MAX - 5, 10, 65534)),
+            t.update(read(u32::MAX - 5, 10, 65534), 0),
             Some(WheelTicks { left: 0, right: 0 })
         );
         // Left wraps forward past 2³², right runs backwards; the counter wraps too.
         assert_eq!(
-            t.update(read(4, 2, 65535)),
+            t.update(read(4, 2, 65535), S / 10),
             Some(WheelTicks {
                 left: 10,
                 right: -8
             })
         );
-        assert_eq!(t.update(read(4, 2, 65535)), None);
+        assert_eq!(t.update(read(4, 2, 65535), 2 * S / 10), None);
         assert_eq!(t.repeated, 1);
         // Two replies lost: the counter jumps by 3; the ticks are still exact.
         assert_eq!(
-            t.update(read(104, 2, 2)),
+            t.update(read(104, 2, 2), 4 * S / 10),
             Some(WheelTicks {
                 left: 110,
                 right: -8
             })
         );
         assert_eq!(t.missed, 2);
+    }
+
+    #[test]
+    fn a_restarted_controller_is_no_wheel_motion() {
+        // At most 1000 ticks/s: 0.1 s allows 102 ticks (with a tick of slack each way).
+        let mut t = EncoderTracker::new(1000.0);
+        t.update(read(5_000_000, 7_000_000, 900), 0);
+        assert_eq!(
+            t.update(read(5_000_100, 6_999_950, 901), S / 10),
+            Some(WheelTicks {
+                left: 100,
+                right: -50
+            })
+        );
+        // The controller restarted behind our back: counts and counter from 0.
+        assert_eq!(t.update(read(3, 1, 1), 2 * S / 10), None);
+        assert_eq!((t.implausible, t.missed), (1, 0));
+        // It is the new reference: motion goes on from the totals.
+        assert_eq!(
+            t.update(read(13, 5, 2), 3 * S / 10),
+            Some(WheelTicks {
+                left: 110,
+                right: -46
+            })
+        );
+        // Reconnected after a power cycle: the next read only sets the reference,
+        // even one that would be plausible (the counter stepped on by chance).
+        t.restart();
+        assert_eq!(
+            t.update(read(40, 40, 3), 9 * S / 10),
+            Some(WheelTicks {
+                left: 110,
+                right: -46
+            })
+        );
+        assert_eq!(t.implausible, 1);
+        // More ticks than a wheel turns in the time: refused.
+        assert_eq!(t.update(read(40 + 103, 40, 4), 10 * S / 10), None);
+        assert_eq!(t.implausible, 2);
     }
 }

@@ -63,6 +63,11 @@ impl SickScanner {
         self.baud
     }
 
+    /// The angle and resolution it scans.
+    pub fn variant(&self) -> Variant {
+        self.variant
+    }
+
     /// Whether continuous output is on.
     pub fn is_continuous(&self) -> bool {
         self.continuous
@@ -153,6 +158,8 @@ mod tests {
         to_host: VecDeque<u8>,
         host_baud: u32,
         sweeps: usize,
+        /// Bytes on the line before the answer to the next request.
+        inject: Vec<u8>,
     }
 
     impl Link for Wire {
@@ -184,6 +191,7 @@ mod tests {
             // Bytes sent at a rate the scanner does not speak arrive as noise: dropped.
             if self.host_baud == self.scanner.baud_rate().bits_per_second() {
                 let answer = self.scanner.receive(bytes);
+                self.to_host.extend(std::mem::take(&mut self.inject));
                 self.to_host.extend(answer);
             }
             Ok(())
@@ -215,10 +223,11 @@ mod tests {
             to_host: VecDeque::new(),
             host_baud: 0,
             sweeps: 2,
+            inject: Vec::new(),
         };
         let mut laser = SickLaser::connect(wire, config()).unwrap();
         assert_eq!(laser.baud_rate(), BaudRate::B38400);
-        let scan = laser.next_scan().unwrap();
+        let scan = laser.next_scan().unwrap().values;
         assert_eq!(scan.values.len(), 361);
         // Every beam of 180° lies inside the sweep's ±1.6 rad: 2 m everywhere.
         assert!(scan.ranges().iter().all(|r| (r - 2.0).abs() < 1e-6));
@@ -238,6 +247,7 @@ mod tests {
             to_host: VecDeque::new(),
             host_baud: 0,
             sweeps: 3,
+            inject: Vec::new(),
         };
         let mut laser = SickLaser::connect(
             wire,
@@ -258,6 +268,7 @@ mod tests {
             to_host: VecDeque::new(),
             host_baud: 0,
             sweeps: 0,
+            inject: Vec::new(),
         };
         let Err(e) = SickLaser::connect(
             wire,
@@ -276,5 +287,27 @@ mod tests {
                 .contains("refused angle 180° at resolution 0.25°"),
             "{e}"
         );
+    }
+
+    #[test]
+    fn a_reply_behind_a_false_stx_is_found_when_the_line_goes_quiet() {
+        // The stop request lands while a scan is going out: the rest of its range data
+        // holds 02 80 10 01, an STX with a declared length of 272 bytes, then come the ACK
+        // and the A0 reply, then nothing.
+        let wire = Wire {
+            scanner: SickScanner::new(RangeUnit::Millimetres),
+            to_host: VecDeque::new(),
+            host_baud: 0,
+            sweeps: 1,
+            inject: vec![0x10, 0x02, 0x80, 0x10, 0x01, 0x33, 0x44],
+        };
+        let mut laser = SickLaser::connect(wire, config()).unwrap();
+        assert_eq!(laser.baud_rate(), BaudRate::B38400);
+        assert!(laser.counters().parser.truncated >= 1);
+        let scan = laser.next_scan().unwrap();
+        assert_eq!(scan.values.values.len(), 361);
+        // Stamped at the middle of its sweep: the telegram's time on the line and half
+        // the sweep before its arrival.
+        assert_eq!(scan.received - scan.measured, laser.latency());
     }
 }

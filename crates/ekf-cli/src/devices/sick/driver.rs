@@ -5,7 +5,7 @@
 use super::measured::MeasuredValues;
 use super::parser::{DiscardKind, Event, ParserStats, TelegramParser};
 use super::telegram::{
-    BaudRate, Mode, Telegram, Variant, REPLY_MEASURED, REPLY_MODE, REPLY_VARIANT,
+    BaudRate, Mode, Telegram, Variant, FRAME_OVERHEAD, REPLY_MEASURED, REPLY_MODE, REPLY_VARIANT,
 };
 use crate::devices::{DeviceError, Link};
 use std::time::{Duration, Instant};
@@ -50,6 +50,20 @@ pub struct SickCounters {
     pub naks: u64,
 }
 
+/// One scan, with when it was measured.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Scan {
+    /// The values as the scanner sent them.
+    pub values: MeasuredValues,
+    /// When the telegram's last byte arrived: the read that brought it, less the time of
+    /// the bytes that came after it in the same reads.
+    pub received: Instant,
+    /// When the scan was measured: [`Self::received`] less the telegram's time on the line
+    /// (bytes · 10 / baud) and half the sweep ([`Variant::sweep_duration`]), so the middle
+    /// of the sweep. The scanner sends a scan as soon as it is complete.
+    pub measured: Instant,
+}
+
 /// A connected, continuously scanning LMS 2xx.
 pub struct SickLaser<L: Link> {
     link: L,
@@ -58,6 +72,8 @@ pub struct SickLaser<L: Link> {
     baud: BaudRate,
     counters: SickCounters,
     last_fault: Option<String>,
+    /// When the last read that brought bytes returned.
+    last_read: Instant,
 }
 
 impl<L: Link> SickLaser<L> {
@@ -70,6 +86,7 @@ impl<L: Link> SickLaser<L> {
             baud: BaudRate::B9600,
             counters: SickCounters::default(),
             last_fault: None,
+            last_read: Instant::now(),
         };
         laser.find_baud_rate()?;
         laser.switch_baud_rate()?;
@@ -106,9 +123,17 @@ impl<L: Link> SickLaser<L> {
         self.link.name()
     }
 
+    /// The time from a scan's measurement (the middle of its sweep) to the arrival of its
+    /// telegram's last byte at the rate in use.
+    pub fn latency(&self) -> Duration {
+        self.baud
+            .transmission_time(self.config.variant.telegram_bytes())
+            + self.config.variant.sweep_duration() / 2
+    }
+
     /// The next valid scan. Garbage, bad CRCs, truncated telegrams and undecodable scans
     /// are counted and skipped; no valid scan within the scan timeout is an error.
-    pub fn next_scan(&mut self) -> Result<MeasuredValues, DeviceError> {
+    pub fn next_scan(&mut self) -> Result<Scan, DeviceError> {
         let deadline = Instant::now() + self.config.scan_timeout;
         loop {
             while let Some(event) = self.parser.next_event() {
@@ -135,7 +160,7 @@ impl<L: Link> SickLaser<L> {
         Ok(self.link)
     }
 
-    fn scan_event(&mut self, event: Event) -> Option<MeasuredValues> {
+    fn scan_event(&mut self, event: Event) -> Option<Scan> {
         let Event::Telegram(t) = &event else {
             self.note(&event);
             return None;
@@ -146,9 +171,20 @@ impl<L: Link> SickLaser<L> {
         let decoded = MeasuredValues::decode(t.payload())
             .and_then(|m| m.check_count(self.config.variant).map(|()| m));
         match decoded {
-            Ok(m) => {
+            Ok(values) => {
                 self.counters.scans += 1;
-                Some(m)
+                // The bytes still in the parser came after this telegram's last byte.
+                let after = self.baud.byte_time() * self.parser.pending() as u32;
+                let received = self.last_read.checked_sub(after).unwrap_or(self.last_read);
+                let on_line = self
+                    .baud
+                    .transmission_time(t.data.len() + 1 + FRAME_OVERHEAD);
+                let before = on_line + self.config.variant.sweep_duration() / 2;
+                Some(Scan {
+                    values,
+                    received,
+                    measured: received.checked_sub(before).unwrap_or(received),
+                })
             }
             Err(e) => {
                 self.counters.bad_scans += 1;
@@ -232,7 +268,10 @@ impl<L: Link> SickLaser<L> {
     }
 
     /// Sends `request` and waits for the reply `reply_command`, skipping other telegrams
-    /// (scans still in flight). A NAK is a refusal.
+    /// (scans still in flight). A NAK is a refusal. When the line goes quiet (a read
+    /// slice without bytes: many byte times) with bytes still waiting - the head of a
+    /// telegram that will not be completed, or an STX in range data with a bogus length -
+    /// they are flushed, so a reply behind them is not lost.
     fn transact(&mut self, request: &Telegram, reply_command: u8) -> Result<Telegram, DeviceError> {
         let bytes = request.encode();
         self.link
@@ -241,19 +280,19 @@ impl<L: Link> SickLaser<L> {
         let deadline = Instant::now() + self.config.reply_timeout;
         loop {
             while let Some(event) = self.parser.next_event() {
-                match event {
-                    Event::Telegram(t) if t.command == reply_command => return Ok(t),
-                    Event::Nak => {
-                        self.counters.naks += 1;
-                        return Err(self.refused(format!("NAK (15) to the request {bytes:02x?}")));
+                if let Some(reply) = self.awaited(event, reply_command, &bytes) {
+                    return reply;
+                }
+            }
+            let quiet = Instant::now() >= deadline || self.read()? == 0;
+            if quiet && self.parser.pending() > 0 {
+                for event in self.parser.finish() {
+                    if let Some(reply) = self.awaited(event, reply_command, &bytes) {
+                        return reply;
                     }
-                    other => self.note(&other),
                 }
             }
             if Instant::now() >= deadline {
-                for event in self.parser.finish() {
-                    self.note(&event);
-                }
                 return Err(self.silent(
                     self.config.reply_timeout,
                     format!(
@@ -263,7 +302,29 @@ impl<L: Link> SickLaser<L> {
                     ),
                 ));
             }
-            self.read()?;
+        }
+    }
+
+    /// What an event means while waiting for `reply_command` to `request`: the reply,
+    /// a refusal (NAK), or nothing (noted).
+    fn awaited(
+        &mut self,
+        event: Event,
+        reply_command: u8,
+        request: &[u8],
+    ) -> Option<Result<Telegram, DeviceError>> {
+        match event {
+            Event::Telegram(t) if t.command == reply_command => Some(Ok(t)),
+            Event::Nak => {
+                self.counters.naks += 1;
+                Some(Err(
+                    self.refused(format!("NAK (15) to the request {request:02x?}"))
+                ))
+            }
+            other => {
+                self.note(&other);
+                None
+            }
         }
     }
 
@@ -286,14 +347,18 @@ impl<L: Link> SickLaser<L> {
         Ok(())
     }
 
-    fn read(&mut self) -> Result<(), DeviceError> {
+    /// Reads what is there (waiting at most a read slice); the number of bytes.
+    fn read(&mut self) -> Result<usize, DeviceError> {
         let mut buf = [0u8; 1024];
         let n = self
             .link
             .read_some(&mut buf)
             .map_err(|source| self.io("reading", source))?;
+        if n > 0 {
+            self.last_read = Instant::now();
+        }
         self.parser.push(&buf[..n]);
-        Ok(())
+        Ok(n)
     }
 
     fn io(&self, during: &'static str, source: std::io::Error) -> DeviceError {

@@ -34,6 +34,8 @@ pub const RANGE_MASK: u16 = 0x1fff;
 /// Smallest range value that is an error code, not a distance (8183 = 0x1FF7 up to
 /// 8191 = 0x1FFF: no echo, dazzled, …).
 pub const FIRST_ERROR_CODE: u16 = 0x1ff7;
+/// The error code for no echo within the measurable span (0x1FFF).
+pub const NO_ECHO: u16 = RANGE_MASK;
 
 /// Why a `B0` payload could not be decoded; offsets count from the first data byte
 /// after CMD.
@@ -117,27 +119,32 @@ impl MeasuredValues {
         out
     }
 
-    /// Ranges in metres; error codes and zero become +∞ (no return, as REP-117 asks).
+    /// Ranges in metres as REP-117 asks: no echo ([`NO_ECHO`]) and zero become +∞ (no
+    /// return in range), the other error codes (dazzle, …) NaN (an erroneous reading).
     pub fn ranges(&self) -> Vec<f32> {
         let metres = self.unit.metres();
         self.values
             .iter()
             .map(|v| match v & RANGE_MASK {
-                0 => f32::INFINITY,
-                r if r >= FIRST_ERROR_CODE => f32::INFINITY,
+                0 | NO_ECHO => f32::INFINITY,
+                r if r >= FIRST_ERROR_CODE => f32::NAN,
                 r => (f64::from(r) * metres) as f32,
             })
             .collect()
     }
 
-    /// The raw value for a range in metres (rounded to the unit; beyond the measurable
-    /// span or not finite: the "no echo" code 0x1FFF).
+    /// The raw value for a range in metres (rounded to the unit): +∞ and ranges beyond
+    /// the measurable span give the no-echo code [`NO_ECHO`], NaN (an error return, as
+    /// the simulator writes it) the first error code [`FIRST_ERROR_CODE`].
     pub fn value_of(range: f64, unit: RangeUnit) -> u16 {
+        if range.is_nan() {
+            return FIRST_ERROR_CODE;
+        }
         let counts = (range / unit.metres()).round();
         if counts.is_finite() && counts >= 1.0 && counts < f64::from(FIRST_ERROR_CODE) {
             counts as u16
         } else {
-            RANGE_MASK
+            NO_ECHO
         }
     }
 
@@ -185,7 +192,12 @@ mod tests {
         assert_eq!(m.unit, RangeUnit::Millimetres);
         let r = m.ranges();
         assert!((r[0] - 1.234).abs() < 1e-6, "{r:?}");
-        assert!(r[1].is_infinite() && r[2].is_infinite());
+        // REP-117: an error return is NaN, no return +∞.
+        assert!(r[1].is_nan() && r[2].is_infinite());
+        assert!(MeasuredValues::decode(&[0x01, 0x40, 0xff, 0x1f])
+            .unwrap()
+            .ranges()[0]
+            .is_infinite());
         let cm = MeasuredValues::decode(&[0x01, 0x00, 0xe8, 0x03]).unwrap();
         assert_eq!(cm.unit, RangeUnit::Centimetres);
         assert!((cm.ranges()[0] - 10.0).abs() < 1e-6);
@@ -208,7 +220,7 @@ mod tests {
 
     #[test]
     fn encode_round_trips() {
-        let ranges = [0.5, 7.999, f64::INFINITY, 100.0];
+        let ranges = [0.5, 7.999, f64::INFINITY, 100.0, f64::NAN];
         let m = MeasuredValues {
             unit: RangeUnit::Millimetres,
             values: ranges
@@ -220,7 +232,7 @@ mod tests {
         assert_eq!(back, m);
         let r = back.ranges();
         assert!((r[0] - 0.5).abs() < 1e-6 && (r[1] - 7.999).abs() < 1e-6);
-        assert!(r[2].is_infinite() && r[3].is_infinite());
+        assert!(r[2].is_infinite() && r[3].is_infinite() && r[4].is_nan());
         assert!(m.check_count(Variant::DEFAULT).is_err());
         let (min, max, step) = scan_angles(Variant::DEFAULT);
         assert!((f64::from(min) + std::f64::consts::FRAC_PI_2).abs() < 1e-6);

@@ -8,7 +8,7 @@ pub mod measured;
 pub mod parser;
 pub mod telegram;
 
-pub use driver::{SickConfig, SickCounters, SickLaser};
+pub use driver::{Scan, SickConfig, SickCounters, SickLaser};
 pub use measured::{MeasuredValues, RangeUnit};
 pub use parser::{Discard, DiscardKind, Event, ParserStats, TelegramParser};
 pub use telegram::{BaudRate, Mode, Telegram, Variant};

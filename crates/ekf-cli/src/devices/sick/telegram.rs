@@ -2,6 +2,7 @@
 //! the host sends and the replies it reads (DESIGN.md §6).
 
 use super::crc::crc16;
+use std::time::Duration;
 
 /// Start of every telegram.
 pub const STX: u8 = 0x02;
@@ -130,6 +131,18 @@ impl BaudRate {
         }
     }
 
+    /// Time one byte takes on the line: 10 bits (start, 8 data, stop).
+    pub fn byte_time(self) -> Duration {
+        Duration::from_nanos(10_000_000_000 / u64::from(self.bits_per_second()))
+    }
+
+    /// Time `bytes` bytes take on the line.
+    pub fn transmission_time(self, bytes: usize) -> Duration {
+        Duration::from_nanos(
+            (bytes as u64).saturating_mul(10_000_000_000) / u64::from(self.bits_per_second()),
+        )
+    }
+
     /// The rate with this many bits per second, if an LMS 2xx has it.
     pub fn from_bits_per_second(bps: u32) -> Option<Self> {
         Self::SEARCH_ORDER
@@ -170,6 +183,9 @@ impl Mode {
     }
 }
 
+/// One turn of an LMS 2xx's mirror: it spins at 75 Hz.
+pub const MIRROR_TURN: Duration = Duration::from_nanos(1_000_000_000 / 75);
+
 /// Angular range and resolution (command `3B`): 180° or 100°, in steps of 1°, 0.5° or
 /// 0.25° (0.25° only over 100°).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -198,6 +214,24 @@ impl Variant {
     /// Number of values in one scan: angle / resolution + 1.
     pub fn values(self) -> usize {
         usize::from(self.angle_deg) * 100 / usize::from(self.resolution_cdeg.max(1)) + 1
+    }
+
+    /// Mirror turns one scan takes: finer resolutions interlace turns offset by the
+    /// resolution (1° in one turn, 0.5° in two, 0.25° in four).
+    pub fn turns(self) -> u32 {
+        u32::from((100 / self.resolution_cdeg.max(1)).max(1))
+    }
+
+    /// Time from a scan's first beam to its last: the turns before the last one, and the
+    /// scanned angle of the last.
+    pub fn sweep_duration(self) -> Duration {
+        MIRROR_TURN * (self.turns() - 1) + MIRROR_TURN * u32::from(self.angle_deg) / 360
+    }
+
+    /// Bytes of this variant's `B0` telegram on the wire: frame, CMD, count word, two
+    /// bytes per value, STATUS.
+    pub fn telegram_bytes(self) -> usize {
+        FRAME_OVERHEAD + 1 + 2 + 2 * self.values() + 1
     }
 
     /// The request telegram `3B angle(u16 LE) resolution(u16 LE)`.
@@ -261,5 +295,22 @@ mod tests {
         .is_supported());
         let reply = Telegram::reply(REPLY_MODE, &[0x00], 0x10);
         assert_eq!((reply.payload(), reply.status()), (&[0x00][..], Some(0x10)));
+    }
+
+    #[test]
+    fn line_and_sweep_times() {
+        // 180° at 0.5°: 361 values, a 732-byte telegram, 190.6 ms at 38400 baud.
+        assert_eq!(Variant::DEFAULT.telegram_bytes(), 732);
+        let t = BaudRate::B38400.transmission_time(Variant::DEFAULT.telegram_bytes());
+        assert_eq!(t.as_micros(), 190_625);
+        assert_eq!(BaudRate::B9600.byte_time().as_micros(), 1041);
+        // Two interlaced turns: 13.3 ms + half a turn for 180°: 20 ms.
+        assert_eq!(Variant::DEFAULT.sweep_duration().as_millis(), 19);
+        let fine = Variant {
+            angle_deg: 100,
+            resolution_cdeg: 25,
+        };
+        assert_eq!(fine.turns(), 4);
+        assert_eq!(fine.telegram_bytes(), 2 * 401 + 10);
     }
 }
