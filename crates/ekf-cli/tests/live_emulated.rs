@@ -106,6 +106,24 @@ fn ekf() -> Command {
     Command::new(env!("CARGO_BIN_EXE_ekf"))
 }
 
+/// Sends `ekf live` `signal` (`kill`'s spelling, e.g. `-TERM`) and waits for it to end.
+fn stop(mut live: std::process::Child, signal: &str) -> std::process::Output {
+    let status = Command::new("kill")
+        .args([signal, &live.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let deadline = Instant::now() + Duration::from_secs(60);
+    while live.try_wait().unwrap().is_none() {
+        assert!(
+            Instant::now() < deadline,
+            "ekf live did not stop on kill {signal}"
+        );
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    live.wait_with_output().unwrap()
+}
+
 fn poses(path: &Path) -> Vec<(u64, Vec<u8>)> {
     let bag = BagReader::open(path).unwrap();
     bag.messages()
@@ -121,7 +139,7 @@ fn faults_reconnect_sigterm_and_bit_identical_replay() {
     let dir = tempfile::tempdir().unwrap();
     let emulators = start_emulators(dir.path());
     let recording = dir.path().join("run.mcap");
-    let mut live = ekf()
+    let live = ekf()
         .args(["live", "--json", "--laser"])
         .arg(emulators.path(Device::Laser))
         .arg("--base")
@@ -151,20 +169,7 @@ fn faults_reconnect_sigterm_and_bit_identical_replay() {
         let due = started + Duration::from_millis(100 * u64::from(k + 1));
         std::thread::sleep(due.saturating_duration_since(Instant::now()));
     }
-    let status = Command::new("kill")
-        .args(["-TERM", &live.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(status.success());
-    let deadline = Instant::now() + Duration::from_secs(60);
-    while live.try_wait().unwrap().is_none() {
-        assert!(
-            Instant::now() < deadline,
-            "ekf live did not stop on SIGTERM"
-        );
-        std::thread::sleep(Duration::from_millis(50));
-    }
-    let output = live.wait_with_output().unwrap();
+    let output = stop(live, "-TERM");
     emulators.stop();
     let stdout = String::from_utf8_lossy(&output.stdout);
     let stderr = String::from_utf8_lossy(&output.stderr);
@@ -333,20 +338,7 @@ fn run_live_until(
         let due = started + Duration::from_millis(100 * u64::from(k + 1));
         std::thread::sleep(due.saturating_duration_since(Instant::now()));
     }
-    let status = Command::new("kill")
-        .args([signal, &live.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(status.success());
-    let deadline = Instant::now() + Duration::from_secs(60);
-    while live.try_wait().unwrap().is_none() {
-        assert!(
-            Instant::now() < deadline,
-            "ekf live did not stop on kill {signal}"
-        );
-        std::thread::sleep(Duration::from_millis(50));
-    }
-    let output = live.wait_with_output().unwrap();
+    let output = stop(live, signal);
     emulators.stop();
     let run = LiveRun {
         _dir: dir,
