@@ -379,6 +379,12 @@ fn print_replay_table(s: &replay::ReplaySummary) {
         "  compass: fused {}, rejected {}",
         s.compass.accepted, s.compass.rejected
     );
+    if s.gps.accepted + s.gps.rejected > 0 {
+        println!(
+            "  gps: fused {}, rejected {}",
+            s.gps.accepted, s.gps.rejected
+        );
+    }
     if let Some(a) = &s.accuracy {
         println!("  accuracy vs reference ({} poses): position RMSE {:.3} m (max {:.3} m), heading RMSE {:.2}°", a.matched_poses, a.position_rmse_m, a.position_max_m, a.heading_rmse_deg);
     }

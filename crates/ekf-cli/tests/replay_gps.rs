@@ -111,6 +111,22 @@ fn fixes_pull_a_drifting_estimate_back_and_an_outlier_is_refused() {
     assert_eq!(on["gps"]["rejected"], 1, "{on}");
     let rmse = on["accuracy"]["position_rmse_m"].as_f64().unwrap();
     assert!(rmse < 1.0, "{on}");
+
+    // The table says so too.
+    let out = Command::new(env!("CARGO_BIN_EXE_ekf"))
+        .args([
+            "replay",
+            log.to_str().unwrap(),
+            "--mode",
+            "odometry",
+            "--init-from-truth",
+        ])
+        .arg("--config")
+        .arg(&config)
+        .output()
+        .unwrap();
+    let table = String::from_utf8_lossy(&out.stdout);
+    assert!(table.contains("gps: fused 59, rejected 1"), "{table}");
 }
 
 #[test]
