@@ -21,6 +21,40 @@ pub trait Link: Send {
     fn clear_input(&mut self) -> io::Result<()>;
     /// The port's path, for messages.
     fn name(&self) -> &str;
+
+    /// `device`'s I/O error on this port while `during`.
+    fn io_error(
+        &self,
+        device: &'static str,
+        during: &'static str,
+        source: io::Error,
+    ) -> DeviceError {
+        DeviceError::Io {
+            device,
+            port: self.name().into(),
+            during,
+            source,
+        }
+    }
+
+    /// `device` on this port sent nothing usable for `waited`; `expected` says what.
+    fn silent(&self, device: &'static str, waited: Duration, expected: String) -> DeviceError {
+        DeviceError::Silent {
+            device,
+            port: self.name().into(),
+            waited,
+            expected,
+        }
+    }
+
+    /// `device` on this port refused a request, or the request could not be made.
+    fn refused(&self, device: &'static str, message: String) -> DeviceError {
+        DeviceError::Refused {
+            device,
+            port: self.name().into(),
+            message,
+        }
+    }
 }
 
 /// A serial port opened by path (8N1, no flow control).

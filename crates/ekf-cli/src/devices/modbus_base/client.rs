@@ -152,14 +152,17 @@ impl<L: Link> BaseClient<L> {
         let mut frame = Vec::new();
         request
             .generate_get_inputs(FIRST_REGISTER, REGISTER_COUNT, &mut frame)
-            .map_err(|e| self.refused(format!("cannot build the request: {e:?}")))?;
+            .map_err(|e| {
+                self.link
+                    .refused(DEVICE, format!("cannot build the request: {e:?}"))
+            })?;
         // A late reply to an earlier poll must not be taken for this one.
         self.link
             .clear_input()
-            .map_err(|source| self.io("clearing the input", source))?;
+            .map_err(|source| self.link.io_error(DEVICE, "clearing the input", source))?;
         self.link
             .write_all_bytes(&frame)
-            .map_err(|source| self.io("writing a request", source))?;
+            .map_err(|source| self.link.io_error(DEVICE, "writing a request", source))?;
         self.counters.polls += 1;
         let deadline = Instant::now() + self.config.reply_timeout;
         let mut buf: Vec<u8> = Vec::new();
@@ -224,25 +227,8 @@ impl<L: Link> BaseClient<L> {
             let n = self
                 .link
                 .read_some(&mut chunk)
-                .map_err(|source| self.io("reading", source))?;
+                .map_err(|source| self.link.io_error(DEVICE, "reading", source))?;
             buf.extend_from_slice(&chunk[..n]);
-        }
-    }
-
-    fn io(&self, during: &'static str, source: std::io::Error) -> DeviceError {
-        DeviceError::Io {
-            device: DEVICE,
-            port: self.link.name().into(),
-            during,
-            source,
-        }
-    }
-
-    fn refused(&self, message: String) -> DeviceError {
-        DeviceError::Refused {
-            device: DEVICE,
-            port: self.link.name().into(),
-            message,
         }
     }
 }

@@ -145,7 +145,8 @@ impl<L: Link> SickLaser<L> {
                 for event in self.parser.finish() {
                     self.note(&event);
                 }
-                return Err(self.silent(
+                return Err(self.link.silent(
+                    DEVICE,
                     self.config.scan_timeout,
                     "measured values (B0 telegrams) in continuous output".into(),
                 ));
@@ -213,7 +214,8 @@ impl<L: Link> SickLaser<L> {
                 Err(e) => return Err(e),
             }
         }
-        Err(self.silent(
+        Err(self.link.silent(
+            DEVICE,
             self.config.reply_timeout * BaudRate::SEARCH_ORDER.len() as u32,
             "an ACK (06) and an A0 reply to the stop request 02 00 02 00 20 25 at 9600, \
              38400, 500000 or 19200 baud: is the scanner powered and connected?"
@@ -246,12 +248,15 @@ impl<L: Link> SickLaser<L> {
         let payload = reply.payload();
         let echoed = payload.get(1..).and_then(Variant::from_bytes);
         if payload.first() != Some(&1) || echoed != Some(v) {
-            return Err(self.refused(format!(
-                "refused angle {}° at resolution {}° (3B reply {:02x?})",
-                v.angle_deg,
-                f64::from(v.resolution_cdeg) / 100.0,
-                reply.data
-            )));
+            return Err(self.link.refused(
+                DEVICE,
+                format!(
+                    "refused angle {}° at resolution {}° (3B reply {:02x?})",
+                    v.angle_deg,
+                    f64::from(v.resolution_cdeg) / 100.0,
+                    reply.data
+                ),
+            ));
         }
         Ok(())
     }
@@ -260,10 +265,13 @@ impl<L: Link> SickLaser<L> {
         let reply = self.transact(&mode.request(), REPLY_MODE)?;
         match reply.payload().first() {
             Some(0) => Ok(()),
-            other => Err(self.refused(format!(
-                "mode change 20 {:02x} failed (A0 status {other:02x?}, expected 00)",
-                mode.code()
-            ))),
+            other => Err(self.link.refused(
+                DEVICE,
+                format!(
+                    "mode change 20 {:02x} failed (A0 status {other:02x?}, expected 00)",
+                    mode.code()
+                ),
+            )),
         }
     }
 
@@ -276,7 +284,7 @@ impl<L: Link> SickLaser<L> {
         let bytes = request.encode();
         self.link
             .write_all_bytes(&bytes)
-            .map_err(|source| self.io("writing a request", source))?;
+            .map_err(|source| self.link.io_error(DEVICE, "writing a request", source))?;
         let deadline = Instant::now() + self.config.reply_timeout;
         loop {
             while let Some(event) = self.parser.next_event() {
@@ -293,7 +301,8 @@ impl<L: Link> SickLaser<L> {
                 }
             }
             if Instant::now() >= deadline {
-                return Err(self.silent(
+                return Err(self.link.silent(
+                    DEVICE,
                     self.config.reply_timeout,
                     format!(
                         "an {reply_command:02X} reply to {:02x?} at {} baud",
@@ -317,9 +326,10 @@ impl<L: Link> SickLaser<L> {
             Event::Telegram(t) if t.command == reply_command => Some(Ok(t)),
             Event::Nak => {
                 self.counters.naks += 1;
-                Some(Err(
-                    self.refused(format!("NAK (15) to the request {request:02x?}"))
-                ))
+                Some(Err(self.link.refused(
+                    DEVICE,
+                    format!("NAK (15) to the request {request:02x?}"),
+                )))
             }
             other => {
                 self.note(&other);
@@ -331,12 +341,12 @@ impl<L: Link> SickLaser<L> {
     fn set_host_baud(&mut self, baud: BaudRate) -> Result<(), DeviceError> {
         self.link
             .set_baud_rate(baud.bits_per_second())
-            .map_err(|source| self.io("setting the baud rate", source))?;
+            .map_err(|source| self.link.io_error(DEVICE, "setting the baud rate", source))?;
         self.baud = baud;
         // Bytes received at another rate are noise; start clean.
         self.link
             .clear_input()
-            .map_err(|source| self.io("clearing the input", source))?;
+            .map_err(|source| self.link.io_error(DEVICE, "clearing the input", source))?;
         for event in self.parser.finish() {
             if let Event::Discarded(d) = event {
                 if d.kind == DiscardKind::Garbage {
@@ -353,37 +363,11 @@ impl<L: Link> SickLaser<L> {
         let n = self
             .link
             .read_some(&mut buf)
-            .map_err(|source| self.io("reading", source))?;
+            .map_err(|source| self.link.io_error(DEVICE, "reading", source))?;
         if n > 0 {
             self.last_read = Instant::now();
         }
         self.parser.push(&buf[..n]);
         Ok(n)
-    }
-
-    fn io(&self, during: &'static str, source: std::io::Error) -> DeviceError {
-        DeviceError::Io {
-            device: DEVICE,
-            port: self.link.name().into(),
-            during,
-            source,
-        }
-    }
-
-    fn silent(&self, waited: Duration, expected: String) -> DeviceError {
-        DeviceError::Silent {
-            device: DEVICE,
-            port: self.link.name().into(),
-            waited,
-            expected,
-        }
-    }
-
-    fn refused(&self, message: String) -> DeviceError {
-        DeviceError::Refused {
-            device: DEVICE,
-            port: self.link.name().into(),
-            message,
-        }
     }
 }
