@@ -93,10 +93,10 @@ impl Robot {
     }
 }
 
-fn start_emulators(dir: &Path) -> Emulators {
+fn start_emulators(dir: &Path, unit: RangeUnit) -> Emulators {
     Emulators::start(&EmulatorOptions {
         dir: dir.join("dev"),
-        unit: RangeUnit::Millimetres,
+        unit,
         unit_id: 1,
     })
     .unwrap()
@@ -136,26 +136,13 @@ fn poses(path: &Path) -> Vec<(u64, Vec<u8>)> {
 
 #[test]
 fn faults_reconnect_sigterm_and_bit_identical_replay() {
-    let dir = tempfile::tempdir().unwrap();
-    let emulators = start_emulators(dir.path());
-    let recording = dir.path().join("run.mcap");
-    let live = ekf()
-        .args(["live", "--json", "--laser"])
-        .arg(emulators.path(Device::Laser))
-        .arg("--base")
-        .arg(emulators.path(Device::Base))
-        .arg("--record")
-        .arg(&recording)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-
-    // 9 s of driving, paced in real time at 10 Hz; the laser sweeps at 5 Hz.
+    // 9 s of driving, paced in real time at 10 Hz; the laser sweeps at 5 Hz. The robot
+    // waits at its start (k = 0) while the devices come up.
     let mut robot = Robot::new();
-    let started = Instant::now();
-    for k in 0..90u32 {
-        robot.step(0.1);
+    let run = run_live(RangeUnit::Millimetres, 90, |k, emulators| {
+        if k > 0 {
+            robot.step(0.1);
+        }
         emulators.sample(robot.sample(k % 2 == 0));
         match k {
             20 => emulators.fault(Device::Laser, Fault::Disconnect(Duration::from_millis(600))),
@@ -166,21 +153,15 @@ fn faults_reconnect_sigterm_and_bit_identical_replay() {
             67 => emulators.fault(Device::Base, Fault::BadChecksum),
             _ => {}
         }
-        let due = started + Duration::from_millis(100 * u64::from(k + 1));
-        std::thread::sleep(due.saturating_duration_since(Instant::now()));
-    }
-    let output = stop(live, "-TERM");
-    emulators.stop();
-    let stdout = String::from_utf8_lossy(&output.stdout);
-    let stderr = String::from_utf8_lossy(&output.stderr);
-    assert!(output.status.success(), "stderr: {stderr}");
+    });
+    let (stdout, stderr, recording) = (&run.stdout, &run.stderr, &run.recording);
 
     // The replug was reported and the laser came back.
     assert!(stderr.contains("reconnecting"), "{stderr}");
     assert!(stderr.contains("back:"), "{stderr}");
 
     // The summary (last line) counts the faults.
-    let summary: serde_json::Value = serde_json::from_str(stdout.lines().last().unwrap()).unwrap();
+    let summary = run.summary();
     let laser = &summary["devices"]["laser"];
     assert!(laser["garbage_bytes"].as_u64().unwrap() >= 50, "{summary}");
     assert!(laser["truncated"].as_u64().unwrap() >= 1, "{summary}");
@@ -217,10 +198,10 @@ fn faults_reconnect_sigterm_and_bit_identical_replay() {
     );
 
     // The recording is complete and replays to the same poses, bit for bit.
-    let replayed = dir.path().join("replayed.mcap");
+    let replayed = recording.with_file_name("replayed.mcap");
     let out = ekf()
         .arg("replay")
-        .arg(&recording)
+        .arg(recording)
         .arg("--out")
         .arg(&replayed)
         .output()
@@ -230,7 +211,7 @@ fn faults_reconnect_sigterm_and_bit_identical_replay() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let live_poses = poses(&recording);
+    let live_poses = poses(recording);
     assert!(live_poses.len() > 50, "{}", live_poses.len());
     assert_eq!(live_poses, poses(&replayed));
 }
@@ -238,7 +219,7 @@ fn faults_reconnect_sigterm_and_bit_identical_replay() {
 #[test]
 fn a_silent_laser_is_a_timeout_naming_the_port() {
     let dir = tempfile::tempdir().unwrap();
-    let emulators = start_emulators(dir.path());
+    let emulators = start_emulators(dir.path(), RangeUnit::Millimetres);
     emulators.fault(Device::Laser, Fault::Silence(Duration::from_secs(120)));
     let laser = emulators.path(Device::Laser);
     let out = ekf()
@@ -303,12 +284,7 @@ fn run_live_until(
     mut step: impl FnMut(u32, &Emulators),
 ) -> LiveRun {
     let dir = tempfile::tempdir().unwrap();
-    let emulators = Emulators::start(&EmulatorOptions {
-        dir: dir.path().join("dev"),
-        unit,
-        unit_id: 1,
-    })
-    .unwrap();
+    let emulators = start_emulators(dir.path(), unit);
     let recording = dir.path().join("run.mcap");
     let mut live = ekf()
         .args(["live", "--json", "--laser"])

@@ -1,13 +1,15 @@
 //! GPS fixes as position measurements (`[gps]` in the configuration): off by default,
 //! fused about the configured origin when on, outliers refused by the 2-dof gate.
 
+mod replay_support;
+
 use ekf_cli::geo::GeoOrigin;
 use ekf_cli::mcap_io::BagWriter;
 use ekf_cli::ros2::build::{header, odometry, BASE_FRAME, MAP_FRAME};
 use ekf_cli::ros2::sensor_msgs::{JointState, NavSatFix, NavSatStatus};
 use ekf_core::Pose2;
+use replay_support::{ekf, replay_json};
 use std::path::Path;
-use std::process::Command;
 
 const ORIGIN: GeoOrigin = GeoOrigin {
     latitude: 10.77,
@@ -65,28 +67,12 @@ fn write_log(path: &Path) {
     bag.finish().unwrap();
 }
 
-fn replay(log: &Path, config: Option<&Path>) -> serde_json::Value {
-    let mut args = vec![
-        "replay".to_owned(),
-        log.display().to_string(),
-        "--mode".into(),
-        "odometry".into(),
-        "--init-from-truth".into(),
-        "--json".into(),
-    ];
-    if let Some(c) = config {
-        args.extend(["--config".into(), c.display().to_string()]);
-    }
-    let out = Command::new(env!("CARGO_BIN_EXE_ekf"))
-        .args(&args)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).unwrap()
+/// `ekf replay --json` in odometry mode from the first reference pose, with `extra`
+/// arguments.
+fn replay(log: &Path, extra: &[&str]) -> serde_json::Value {
+    let mut args = vec!["--mode", "odometry", "--init-from-truth"];
+    args.extend_from_slice(extra);
+    replay_json(log, &args)
 }
 
 #[test]
@@ -95,7 +81,7 @@ fn fixes_pull_a_drifting_estimate_back_and_an_outlier_is_refused() {
     let log = dir.path().join("gps.mcap");
     write_log(&log);
 
-    let off = replay(&log, None);
+    let off = replay(&log, &[]);
     assert_eq!(off["gps"]["accepted"], 0);
     let drift = off["accuracy"]["position_max_m"].as_f64().unwrap();
     assert!(drift > 5.0, "dead reckoning should drift: {off}");
@@ -106,25 +92,22 @@ fn fixes_pull_a_drifting_estimate_back_and_an_outlier_is_refused() {
         "[gps]\nfuse = true\norigin_latitude = 10.77\norigin_longitude = 106.66\n",
     )
     .unwrap();
-    let on = replay(&log, Some(&config));
+    let on = replay(&log, &["--config", config.to_str().unwrap()]);
     assert_eq!(on["gps"]["accepted"], 59, "{on}");
     assert_eq!(on["gps"]["rejected"], 1, "{on}");
     let rmse = on["accuracy"]["position_rmse_m"].as_f64().unwrap();
     assert!(rmse < 1.0, "{on}");
 
     // The table says so too.
-    let out = Command::new(env!("CARGO_BIN_EXE_ekf"))
-        .args([
-            "replay",
-            log.to_str().unwrap(),
-            "--mode",
-            "odometry",
-            "--init-from-truth",
-        ])
-        .arg("--config")
-        .arg(&config)
-        .output()
-        .unwrap();
+    let out = ekf(&[
+        "replay",
+        log.to_str().unwrap(),
+        "--mode",
+        "odometry",
+        "--init-from-truth",
+        "--config",
+        config.to_str().unwrap(),
+    ]);
     let table = String::from_utf8_lossy(&out.stdout);
     assert!(table.contains("gps: fused 59, rejected 1"), "{table}");
 }
@@ -136,15 +119,12 @@ fn a_bad_origin_is_named() {
     write_log(&log);
     let config = dir.path().join("bad.toml");
     std::fs::write(&config, "[gps]\nfuse = true\norigin_latitude = 95.0\n").unwrap();
-    let out = Command::new(env!("CARGO_BIN_EXE_ekf"))
-        .args([
-            "replay",
-            log.to_str().unwrap(),
-            "--config",
-            config.to_str().unwrap(),
-        ])
-        .output()
-        .unwrap();
+    let out = ekf(&[
+        "replay",
+        log.to_str().unwrap(),
+        "--config",
+        config.to_str().unwrap(),
+    ]);
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success());
     assert!(
