@@ -120,7 +120,7 @@ pub fn simulate(
         estimate_x: column(&run.estimate, |p| p.x)?,
         estimate_y: column(&run.estimate, |p| p.y)?,
         estimate_theta: column(&run.estimate, |p| p.theta)?,
-        nees: array(run.nees)?,
+        nees: array(run.nees.iter().map(|n| n.pose).collect())?,
         path_deviation: array(run.path_deviation)?,
         summary: to_python(py, &summary)?.unbind(),
     })

@@ -109,8 +109,8 @@ pub struct SimResult {
     pub truth: Trajectory,
     /// The in-loop estimate at every step (empty without an estimator).
     pub estimate: Trajectory,
-    /// The estimate's NEES `eᵀ P⁻¹ e` at every step, `e = (x̂ − x, ŷ − y, wrap(θ̂ − θ))`.
-    pub nees: Vec<f64>,
+    /// The estimate's NEES at every step (see [`Nees`]).
+    pub nees: Vec<Nees>,
     /// Distance of the true position from the commanded path at every step (m).
     pub path_deviation: Vec<f64>,
     /// Distance travelled up to every step (m).
@@ -121,15 +121,46 @@ pub struct SimResult {
     pub map: Option<LineMap>,
 }
 
-/// `eᵀ P⁻¹ e` for the error of `est` against `truth`; `None` if `P` is not SPD.
-pub fn nees(est: &Pose2<f64>, truth: &Pose2<f64>, p: &Matrix3<f64>) -> Option<f64> {
-    let e = Vector3::new(
-        est.x - truth.x,
-        est.y - truth.y,
-        angle_diff(est.theta, truth.theta),
-    );
-    let chol = p.cholesky()?;
-    Some(e.dot(&chol.solve(&e)))
+/// The normalised estimation error squared of one estimate, whole and by part, with
+/// `e = (x̂ − x, ŷ − y, wrap(θ̂ − θ))`. For a consistent filter each is chi-square
+/// distributed with as many degrees of freedom as it has components, so the parts show
+/// which of position and heading a filter is over- or under-confident in.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Nees {
+    /// `eᵀ P⁻¹ e` (3 dof).
+    pub pose: f64,
+    /// `e_xyᵀ P_xy⁻¹ e_xy` with the 2×2 position block of `P` (2 dof).
+    pub position: f64,
+    /// `e_θ² / P_θθ` (1 dof).
+    pub heading: f64,
+}
+
+impl Nees {
+    /// The NEES of `est` against `truth` with covariance `p`; `None` if `p` is not
+    /// symmetric positive definite.
+    pub fn of(est: &Pose2<f64>, truth: &Pose2<f64>, p: &Matrix3<f64>) -> Option<Self> {
+        let e = Vector3::new(
+            est.x - truth.x,
+            est.y - truth.y,
+            angle_diff(est.theta, truth.theta),
+        );
+        let pose = e.dot(&p.cholesky()?.solve(&e));
+        let e_xy = e.fixed_rows::<2>(0).into_owned();
+        let p_xy = p.fixed_view::<2, 2>(0, 0).into_owned();
+        let position = e_xy.dot(&p_xy.cholesky()?.solve(&e_xy));
+        Some(Self {
+            pose,
+            position,
+            heading: e.z * e.z / p[(2, 2)],
+        })
+    }
+
+    /// All three NaN: a step whose covariance was not positive definite.
+    pub const UNDEFINED: Self = Self {
+        pose: f64::NAN,
+        position: f64::NAN,
+        heading: f64::NAN,
+    };
 }
 
 /// Runs `scenario` with `options`, writing every measurement to `recorder` if given.
@@ -196,7 +227,7 @@ pub fn simulate(
             result.estimate.push(t_ns, est);
             result
                 .nees
-                .push(nees(&est, &truth, f.localizer.covariance()).unwrap_or(f64::NAN));
+                .push(Nees::of(&est, &truth, f.localizer.covariance()).unwrap_or(Nees::UNDEFINED));
         }
         last_ticks = ticks;
         result.truth.push(t_ns, truth);
@@ -268,5 +299,34 @@ impl InLoop {
             stats.lines_fused += report.fused as u64;
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn nees_parts_add_up_without_correlation_and_the_position_is_marginal() {
+        let truth = Pose2::new(1.0, 2.0, 3.1);
+        // A heading error across ±π: −3.1 − 3.1 wraps to 2π − 6.2 = 0.0832 rad.
+        let est = Pose2::new(1.03, 1.96, -3.1);
+        let diagonal = Matrix3::from_diagonal(&Vector3::new(1e-3, 4e-3, 1e-2));
+        let n = Nees::of(&est, &truth, &diagonal).unwrap();
+        let e_theta = angle_diff(est.theta, truth.theta);
+        assert!((e_theta - (std::f64::consts::TAU - 6.2)).abs() < 1e-12);
+        assert!((n.position - (0.03f64.powi(2) / 1e-3 + 0.04f64.powi(2) / 4e-3)).abs() < 1e-9);
+        assert!((n.heading - e_theta * e_theta / 1e-2).abs() < 1e-9);
+        assert!((n.pose - (n.position + n.heading)).abs() < 1e-9);
+        // With x and heading correlated, the position part still uses only P's position
+        // block, and the whole differs from the sum of the parts.
+        let mut p = diagonal;
+        p[(0, 2)] = 2e-3;
+        p[(2, 0)] = 2e-3;
+        let c = Nees::of(&est, &truth, &p).unwrap();
+        assert_eq!((c.position, c.heading), (n.position, n.heading));
+        assert!((c.pose - n.pose).abs() > 1e-3);
+        let not_spd = Matrix3::from_diagonal(&Vector3::new(1e-3, -1.0, 1e-2));
+        assert_eq!(Nees::of(&est, &truth, &not_spd), None);
     }
 }
