@@ -66,9 +66,9 @@ pub struct ModeSummary {
 /// each time step `N` times the ensemble-average NEES of an `n`-dimensional error is
 /// χ²(nN) for a consistent filter, so that average lies in
 /// `[χ²₀.₀₂₅(nN)/N, χ²₀.₉₇₅(nN)/N]` with probability 0.95: about 95 % of the steps should
-/// be inside. The time average of the ensemble average is
-/// reported too; held against the same band it is a lenient check (a time average
-/// varies much less than one step's value).
+/// be inside. The time average of the ensemble average is reported too; held against
+/// the same band it is a lenient check (a time average varies much less than one step's
+/// value).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct NeesSummary {
     /// Runs.
