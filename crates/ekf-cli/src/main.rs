@@ -337,7 +337,7 @@ impl From<CliMode> for Mode {
 fn create_parent(path: &std::path::Path) -> Result<(), String> {
     match path.parent() {
         Some(dir) if !dir.as_os_str().is_empty() => {
-            std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))
+            ekf_cli::commands::create_output_dir(dir).map_err(|e| format!("{}: {e}", dir.display()))
         }
         _ => Ok(()),
     }

@@ -142,7 +142,7 @@ pub struct Emulators {
 impl Emulators {
     /// Creates the pseudo-terminals and their symlinks and starts the device threads.
     pub fn start(options: &EmulatorOptions) -> std::io::Result<Self> {
-        std::fs::create_dir_all(&options.dir)?;
+        crate::commands::create_output_dir(&options.dir)?;
         let laser = devices::Laser::new(options.unit);
         let base = devices::Base::new(options.unit_id);
         let gps = devices::Gps;

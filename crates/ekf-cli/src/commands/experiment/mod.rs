@@ -84,7 +84,7 @@ pub enum ExperimentError {
 
 /// Creates the output folder.
 pub(crate) fn prepare_dir(dir: &Path) -> Result<(), ExperimentError> {
-    std::fs::create_dir_all(dir).map_err(|source| ExperimentError::Io {
+    super::create_output_dir(dir).map_err(|source| ExperimentError::Io {
         path: dir.display().to_string(),
         source,
     })
