@@ -27,6 +27,8 @@ fn truncated_files_deliver_everything_before_the_cut_then_say_where() {
     assert_eq!(original.len() as u64, SCANS);
     let bytes = std::fs::read(&full).unwrap();
     let len = bytes.len();
+    let first = &chunk_indexes(&full)[0];
+    let first_chunk_end = first.chunk_start_offset + first.chunk_length;
 
     let mut previous = 0;
     for cut in [
@@ -43,7 +45,19 @@ fn truncated_files_deliver_everything_before_the_cut_then_say_where() {
     ] {
         let path = dir.path().join(format!("cut_{cut}.mcap"));
         std::fs::write(&path, &bytes[..cut]).unwrap();
-        let bag = BagReader::open(&path).unwrap();
+        let bag = match BagReader::open(&path) {
+            Ok(bag) => bag,
+            Err(err) => {
+                // Cut before the first chunk ended: no channel, nothing readable, so the
+                // file does not open, and the error says where it broke.
+                assert!(cut as u64 <= first_chunk_end, "cut at {cut}: {err}");
+                assert!(corrupt_offset(&err) <= cut as u64, "cut at {cut}: {err}");
+                let text = err.to_string();
+                assert!(text.contains(&format!("cut_{cut}.mcap")), "{text}");
+                assert!(text.contains("after 0 messages"), "{text}");
+                continue;
+            }
+        };
         assert_eq!(
             bag.order(),
             MessageOrder::LogTime,
@@ -259,4 +273,18 @@ fn a_missing_file_names_the_path() {
     let err = BagReader::open("/nonexistent/run.mcap").unwrap_err();
     assert!(matches!(err, ReadError::Open { .. }));
     assert!(err.to_string().contains("/nonexistent/run.mcap"), "{err}");
+}
+
+#[test]
+fn a_file_that_is_not_mcap_does_not_open_and_says_so() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("notes.mcap");
+    std::fs::write(&path, "# not a bag, but a text file of some length\n").unwrap();
+    let err = BagReader::open(&path).unwrap_err();
+    assert_eq!(corrupt_offset(&err), 0, "{err}");
+    let text = err.to_string();
+    assert!(
+        text.contains("notes.mcap") && text.contains("magic"),
+        "{text}"
+    );
 }

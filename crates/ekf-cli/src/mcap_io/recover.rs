@@ -52,6 +52,10 @@ pub(crate) fn recover(file: &mut File) -> Recovered {
     let damage = loop {
         let event = match reader.next_event() {
             None => break None,
+            // A wrong magic is wrong from its first byte.
+            Some(Err(McapError::BadMagic)) => {
+                break Some(SourceError::mcap(0, McapError::BadMagic))
+            }
             Some(Err(e)) => break Some(SourceError::mcap(pos.min(fed), e)),
             Some(Ok(event)) => event,
         };
