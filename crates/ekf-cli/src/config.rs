@@ -283,7 +283,7 @@ impl Config {
     }
 
     /// Checks the values that serde cannot: positive lengths and deviations, probabilities
-    /// in (0, 1), valid extraction parameters.
+    /// in (0, 1), valid extraction and matching parameters.
     pub fn validated(self, path: &str) -> Result<Self, ConfigError> {
         let invalid = |key: &str, message: &str| ConfigError::Invalid {
             path: path.into(),
@@ -371,6 +371,8 @@ impl Config {
         l.extraction
             .validated()
             .map_err(|e| invalid("localizer.extraction", &e.to_string()))?;
+        lrf_lines::Matcher::new(l.matching)
+            .map_err(|e| invalid("localizer.matching", &e.to_string()))?;
         Ok(self)
     }
 }
@@ -476,6 +478,16 @@ mod tests {
         assert!(
             err.contains("localizer.extraction") && err.contains("min_points"),
             "{err}"
+        );
+        let err = Config::from_toml(
+            "# map noise\n[localizer.matching]\nmap_sigma_r = -1\n",
+            "m.toml",
+        )
+        .unwrap_err()
+        .to_string();
+        assert_eq!(
+            err,
+            "m.toml: line 2: localizer.matching: matching map_sigma_r is out of range: expected >= 0"
         );
     }
 }
