@@ -64,15 +64,25 @@ pub struct SerialLink {
 }
 
 impl SerialLink {
-    /// Opens `path` at `bps` for `device` (named in errors).
+    /// Opens `path` at `bps` for `device` (named in errors). When that fails on a path
+    /// that is a regular file or a folder, the error says it is not a serial port rather
+    /// than what the OS said of the ioctl ("Not a typewriter").
     pub fn open(device: &'static str, path: &str, bps: u32) -> Result<Self, DeviceError> {
         let port = serialport::new(path, bps)
             .timeout(READ_SLICE)
             .open()
-            .map_err(|e| DeviceError::Open {
-                device,
-                port: path.into(),
-                message: e.to_string(),
+            .map_err(|e| {
+                let kind = std::fs::metadata(path).ok().map(|m| m.file_type());
+                let message = match kind {
+                    Some(t) if t.is_file() => "not a serial port but a regular file".into(),
+                    Some(t) if t.is_dir() => "not a serial port but a folder".into(),
+                    _ => e.to_string(),
+                };
+                DeviceError::Open {
+                    device,
+                    port: path.into(),
+                    message,
+                }
             })?;
         Ok(Self {
             port,
@@ -112,5 +122,39 @@ impl Link for SerialLink {
 
     fn name(&self) -> &str {
         &self.name
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn open_error(path: &std::path::Path) -> String {
+        match SerialLink::open("laser", path.to_str().unwrap(), 9600) {
+            Ok(_) => panic!("{} opened as a serial port", path.display()),
+            Err(e) => e.to_string(),
+        }
+    }
+
+    #[test]
+    fn a_file_or_folder_given_as_port_is_not_a_serial_port() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("scan.mcap");
+        std::fs::write(&file, b"not a tty").unwrap();
+        assert_eq!(
+            open_error(&file),
+            format!(
+                "laser on {}: cannot open: not a serial port but a regular file",
+                file.display()
+            )
+        );
+        assert!(open_error(dir.path()).ends_with("not a serial port but a folder"));
+        let missing = dir.path().join("ttyUSB9");
+        let e = open_error(&missing);
+        assert!(
+            e.starts_with(&format!("laser on {}: cannot open: ", missing.display()))
+                && !e.contains("not a serial port"),
+            "{e}"
+        );
     }
 }
