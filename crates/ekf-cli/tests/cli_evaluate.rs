@@ -133,4 +133,27 @@ fn mcap_and_tum_outputs_of_a_replay_evaluate_the_same() {
         err.contains("no pose topic") && err.contains("/scan (sensor_msgs/msg/LaserScan)"),
         "{err}"
     );
+    // A named topic that carries no poses is refused, not read as an empty trajectory.
+    let out = Command::new(env!("CARGO_BIN_EXE_ekf"))
+        .args([
+            "evaluate",
+            &data("aces.mcap"),
+            "--est-topic",
+            "/scan",
+            "--truth",
+            &data("aces.mcap"),
+        ])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(
+        err,
+        format!(
+            "ekf: error: {}: topic /scan carries sensor_msgs/msg/LaserScan; expected one of \
+             geometry_msgs/msg/PoseWithCovarianceStamped, geometry_msgs/msg/PoseStamped, \
+             nav_msgs/msg/Odometry\n",
+            data("aces.mcap")
+        )
+    );
 }

@@ -3,7 +3,9 @@
 use crate::eval::{ape, rpe, AlignMode, ApeOptions, ApeSummary, EvalError, RpeOptions, RpeSummary};
 use crate::mcap_io::{BagReader, MessageError, ReadError};
 use crate::replay::inputs::pose2;
-use crate::ros2::AnyMessage;
+use crate::ros2::geometry_msgs::{PoseStamped, PoseWithCovarianceStamped};
+use crate::ros2::nav_msgs::Odometry;
+use crate::ros2::{AnyMessage, RosMessage};
 use crate::trajectory::Trajectory;
 use crate::tum::{read_tum_file, TumError};
 use serde::Serialize;
@@ -25,6 +27,18 @@ pub enum EvaluateError {
     /// A message in a bag could not be decoded.
     #[error(transparent)]
     Message(#[from] MessageError),
+    /// The pose topic carries messages that are not poses.
+    #[error("{path}: topic {topic} carries {type_name}; expected one of {expected}")]
+    NotPoses {
+        /// The bag.
+        path: String,
+        /// The topic.
+        topic: String,
+        /// Its message type.
+        type_name: String,
+        /// The pose types that can be read.
+        expected: String,
+    },
     /// A bag has none of the pose topics looked for.
     #[error("{path}: no pose topic {wanted}; the bag has: {available}")]
     NoPoseTopic {
@@ -67,6 +81,23 @@ pub fn load_trajectory(path: &Path, topic: Option<&str>) -> Result<Trajectory, E
             available: bag.describe_topics(),
         });
     };
+    let pose_types = [
+        PoseWithCovarianceStamped::type_name(),
+        PoseStamped::type_name(),
+        Odometry::type_name(),
+    ];
+    if let Some(other) = bag
+        .topics()
+        .iter()
+        .find(|i| i.topic == topic && !pose_types.contains(&i.type_name.as_str()))
+    {
+        return Err(EvaluateError::NotPoses {
+            path: path.display().to_string(),
+            topic: topic.into(),
+            type_name: other.type_name.clone(),
+            expected: pose_types.join(", "),
+        });
+    }
     let mut trajectory = Trajectory::default();
     for message in bag.messages()? {
         let message = message?;
