@@ -242,3 +242,28 @@ proptest! {
         }
     }
 }
+
+#[test]
+fn a_log_without_records_to_import_is_an_error_and_its_bag_is_finished() {
+    use ekf_cli::commands::import::{import_log, LogFormat};
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("notes.log");
+    std::fs::write(&input, "# a CARMEN header\nTRUEPOS 1 2 3\n# end\n").unwrap();
+    let bag = dir.path().join("notes.mcap");
+    let e = import_log(&input, &bag, LogFormat::Carmen(CarmenOptions::default())).unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        format!(
+            "{}: nothing to import: expected ODOM, FLASER or ROBOTLASER1 lines, found none \
+             (1 lines of other record types, 2 comment lines)",
+            input.display()
+        )
+    );
+    let e = import_log(&input, &bag, LogFormat::Mrpt).unwrap_err();
+    assert!(
+        e.to_string().contains("expected ODOM or RAWSCAN lines"),
+        "{e}"
+    );
+    let written = ekf_cli::mcap_io::BagReader::open(&bag).unwrap();
+    assert!(written.topics().is_empty());
+}

@@ -48,6 +48,21 @@ pub enum ImportCommandError {
         /// Where and what.
         source: ImportError,
     },
+    /// The input has no record the importer reads (the output bag is empty).
+    #[error(
+        "{path}: nothing to import: expected {expected} lines, found none \
+         ({unknown} lines of other record types, {comments} comment lines)"
+    )]
+    NoRecords {
+        /// The input file.
+        path: String,
+        /// The record lines the format has.
+        expected: &'static str,
+        /// Lines of record types the importer does not read.
+        unknown: u64,
+        /// Comment lines.
+        comments: u64,
+    },
     /// The output could not be written.
     #[error(transparent)]
     Write(#[from] WriteError),
@@ -63,7 +78,8 @@ pub struct ImportSummary {
 }
 
 /// Converts `input` into the ROS 2 bag `output`. On a malformed line, everything before
-/// it is written, the bag is finished, and the error names the line.
+/// it is written, the bag is finished, and the error names the line. An input without
+/// any record to convert is an error (the bag written is empty).
 pub fn import_log(
     input: &Path,
     output: &Path,
@@ -117,6 +133,17 @@ pub fn import_log(
         Ok(()) => {}
     }
     finished?;
+    if written == 0 {
+        return Err(ImportCommandError::NoRecords {
+            path: name,
+            expected: match format {
+                LogFormat::Carmen(_) => "ODOM, FLASER or ROBOTLASER1",
+                LogFormat::Mrpt => "ODOM or RAWSCAN",
+            },
+            unknown: stats.unknown_lines,
+            comments: stats.comment_lines,
+        });
+    }
     Ok(ImportSummary {
         stats,
         messages_written: written,
