@@ -13,6 +13,17 @@ fn evo_case(case: &str, metric: &str) -> f64 {
     v["cases"][case]["translation_m"][metric].as_f64().unwrap()
 }
 
+/// Runs `ekf evaluate ARGS`, which must fail, and returns what it printed on stderr.
+fn evaluate_fails(args: &[&str]) -> String {
+    let out = Command::new(env!("CARGO_BIN_EXE_ekf"))
+        .arg("evaluate")
+        .args(args)
+        .output()
+        .unwrap();
+    assert!(!out.status.success(), "ekf evaluate {args:?} succeeded");
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
 fn run_json(extra: &[&str]) -> serde_json::Value {
     let out = Command::new(env!("CARGO_BIN_EXE_ekf"))
         .args([
@@ -52,17 +63,7 @@ fn json_matches_evo() {
 
 #[test]
 fn missing_file_names_it_and_fails() {
-    let out = Command::new(env!("CARGO_BIN_EXE_ekf"))
-        .args([
-            "evaluate",
-            "no-such-estimate.txt",
-            "--truth",
-            &golden("evo_ref.txt"),
-        ])
-        .output()
-        .unwrap();
-    assert!(!out.status.success());
-    let err = String::from_utf8_lossy(&out.stderr);
+    let err = evaluate_fails(&["no-such-estimate.txt", "--truth", &golden("evo_ref.txt")]);
     assert!(err.contains("no-such-estimate.txt"), "stderr: {err}");
 }
 
@@ -118,42 +119,21 @@ fn mcap_and_tum_outputs_of_a_replay_evaluate_the_same() {
         "{from_mcap:?} vs {from_tum:?}"
     );
     // A bag without a pose topic names the topics it has.
-    let out = Command::new(env!("CARGO_BIN_EXE_ekf"))
-        .args([
-            "evaluate",
-            &data("mrpt-office.mcap"),
-            "--truth",
-            &data("aces.mcap"),
-        ])
-        .output()
-        .unwrap();
-    assert!(!out.status.success());
-    let err = String::from_utf8_lossy(&out.stderr);
+    let err = evaluate_fails(&[&data("mrpt-office.mcap"), "--truth", &data("aces.mcap")]);
     assert!(
         err.contains("no pose topic") && err.contains("/scan (sensor_msgs/msg/LaserScan)"),
         "{err}"
     );
     // A named topic that carries no poses is refused, not read as an empty trajectory.
-    let out = Command::new(env!("CARGO_BIN_EXE_ekf"))
-        .args([
-            "evaluate",
-            &data("aces.mcap"),
-            "--est-topic",
-            "/scan",
-            "--truth",
-            &data("aces.mcap"),
-        ])
-        .output()
-        .unwrap();
-    assert!(!out.status.success());
-    let err = String::from_utf8_lossy(&out.stderr);
+    let aces = data("aces.mcap");
+    let err = evaluate_fails(&[&aces, "--est-topic", "/scan", "--truth", &aces]);
     assert_eq!(
         err,
         format!(
             "ekf: error: {}: topic /scan carries sensor_msgs/msg/LaserScan; expected one of \
              geometry_msgs/msg/PoseWithCovarianceStamped, geometry_msgs/msg/PoseStamped, \
              nav_msgs/msg/Odometry\n",
-            data("aces.mcap")
+            aces
         )
     );
 }
