@@ -272,7 +272,7 @@ def test_simulate_writes_the_bytes_of_ekf_simulate_and_returns_the_truth(ekf_bin
     # walls' loop, and drives at 0.3 m/s.
     assert (run.x[0], run.y[0], run.theta[0]) == (2.0, 1.0, 0.0)
     assert 5.0 < cli["stats"]["distance_m"] < 6.5
-    assert run.estimate_x.size == run.nees.size == 0
+    assert run.estimate_x.size == run.nees.size == run.nees_heading.size == 0
     assert np.all(run.path_deviation < 0.15)
 
 
@@ -282,6 +282,12 @@ def test_simulate_with_the_ekf_in_the_loop_reports_its_estimate_and_nees():
     assert err.shape == run.nees.shape == (301,)
     assert np.sqrt(np.mean(err ** 2)) < 0.02
     assert np.all(np.isfinite(run.nees)) and 0.5 < run.nees.mean() < 10
+    # The parts: the heading's NEES is e_theta^2 / P_theta_theta, and with the position
+    # and heading nearly uncorrelated the whole is close to the sum of its parts.
+    assert run.nees_position.shape == run.nees_heading.shape == (301,)
+    assert np.all(run.nees_position <= run.nees + 1e-9)
+    assert np.all(run.nees_heading <= run.nees + 1e-9)
+    assert abs(np.mean(run.nees_position + run.nees_heading) / run.nees.mean() - 1) < 0.2
 
 
 # ------------------------------------------------------------------------------ errors

@@ -30,8 +30,12 @@ pub struct SimulationResult {
     pub estimate_y: Py<PyArray1<f64>>,
     /// (N,) the estimate's heading (rad); empty without an estimator.
     pub estimate_theta: Py<PyArray1<f64>>,
-    /// (N,) the estimate's NEES against the truth; empty without an estimator.
+    /// (N,) the estimate's NEES against the truth (3 dof); empty without an estimator.
     pub nees: Py<PyArray1<f64>>,
+    /// (N,) the NEES of its position alone, with P's position block (2 dof).
+    pub nees_position: Py<PyArray1<f64>>,
+    /// (N,) the NEES of its heading alone (1 dof).
+    pub nees_heading: Py<PyArray1<f64>>,
     /// (N,) distance of the true position from the commanded path (m).
     pub path_deviation: Py<PyArray1<f64>>,
     /// The summary dict, exactly what `ekf simulate --json` prints.
@@ -121,6 +125,8 @@ pub fn simulate(
         estimate_y: column(&run.estimate, |p| p.y)?,
         estimate_theta: column(&run.estimate, |p| p.theta)?,
         nees: array(run.nees.iter().map(|n| n.pose).collect())?,
+        nees_position: array(run.nees.iter().map(|n| n.position).collect())?,
+        nees_heading: array(run.nees.iter().map(|n| n.heading).collect())?,
         path_deviation: array(run.path_deviation)?,
         summary: to_python(py, &summary)?.unbind(),
     })

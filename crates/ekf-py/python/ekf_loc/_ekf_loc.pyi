@@ -404,7 +404,13 @@ class SimulationResult:
     def estimate_theta(self) -> _F64Array: ...
     @property
     def nees(self) -> _F64Array:
-        """(N,) the estimate's NEES against the truth."""
+        """(N,) the estimate's NEES against the truth (3 dof)."""
+    @property
+    def nees_position(self) -> _F64Array:
+        """(N,) the NEES of its position alone, with P's position block (2 dof)."""
+    @property
+    def nees_heading(self) -> _F64Array:
+        """(N,) the NEES of its heading alone (1 dof)."""
     @property
     def path_deviation(self) -> _F64Array:
         """(N,) distance of the true position from the commanded path (m)."""
