@@ -45,12 +45,17 @@ fn truncated_files_deliver_everything_before_the_cut_then_say_where() {
     ] {
         let path = dir.path().join(format!("cut_{cut}.mcap"));
         std::fs::write(&path, &bytes[..cut]).unwrap();
-        let bag = match BagReader::open(&path) {
+        // Cut before the first chunk ended: no channel, nothing readable, so the file
+        // does not open, and the error says where it broke. Cut later, it opens.
+        let opened = BagReader::open(&path);
+        assert_eq!(
+            opened.is_err(),
+            (cut as u64) < first_chunk_end,
+            "cut at {cut} (first chunk ends at {first_chunk_end})"
+        );
+        let bag = match opened {
             Ok(bag) => bag,
             Err(err) => {
-                // Cut before the first chunk ended: no channel, nothing readable, so the
-                // file does not open, and the error says where it broke.
-                assert!(cut as u64 <= first_chunk_end, "cut at {cut}: {err}");
                 assert!(corrupt_offset(&err) <= cut as u64, "cut at {cut}: {err}");
                 let text = err.to_string();
                 assert!(text.contains(&format!("cut_{cut}.mcap")), "{text}");
@@ -287,4 +292,19 @@ fn a_file_that_is_not_mcap_does_not_open_and_says_so() {
         text.contains("notes.mcap") && text.contains("magic"),
         "{text}"
     );
+}
+
+#[test]
+fn a_wrong_end_magic_is_reported_where_it_starts_after_every_message() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("end.mcap");
+    let original = write_multi_chunk_bag(&path, 5);
+    let mut bytes = std::fs::read(&path).unwrap();
+    let len = bytes.len();
+    bytes[len - 1] ^= 0xff;
+    std::fs::write(&path, &bytes).unwrap();
+    let (delivered, err) = read_all_ok(&path);
+    assert_eq!(delivered, original);
+    let err = err.expect("the damage is reported after the messages");
+    assert_eq!(corrupt_offset(&err), (len - 8) as u64, "{err}");
 }

@@ -43,7 +43,7 @@ impl BagReader {
     /// Opens `path` and lists its topics. Reads the summary; if the summary is missing or
     /// damaged (a recording cut short), reads the whole file once to rebuild it, checking
     /// every chunk. A damaged file still opens: its intact part can be read, and the
-    /// damage is reported after the last message. A file damaged before its first
+    /// damage is reported after the last message. A damaged file without a single
     /// channel (not MCAP at all, or cut inside its first chunk) is an error naming the
     /// byte offset.
     pub fn open(path: impl AsRef<Path>) -> Result<Self, ReadError> {
@@ -60,8 +60,9 @@ impl BagReader {
             Some(summary) => (summary, None, false),
             None => {
                 let r = recover(&mut file);
-                // Damage before any channel: nothing of the file is readable (it is not
-                // an MCAP file, or was cut before its first chunk), so it does not open.
+                // Damage and no channel at all: nothing of the file is readable (it is
+                // not an MCAP file, or was cut before its first chunk ended), so it does
+                // not open.
                 if let (Some(damage), true) = (&r.damage, r.summary.channels.is_empty()) {
                     return Err(to_read_error(&path, 0, damage.clone()));
                 }

@@ -52,8 +52,9 @@ pub(crate) fn recover(file: &mut File) -> Recovered {
     let damage = loop {
         let event = match reader.next_event() {
             None => break None,
-            // A wrong magic is wrong from its first byte.
-            Some(Err(McapError::BadMagic)) => {
+            // A wrong start magic is wrong from byte 0; a wrong end magic where it starts
+            // (after the last record).
+            Some(Err(McapError::BadMagic)) if pos == MAGIC_LEN => {
                 break Some(SourceError::mcap(0, McapError::BadMagic))
             }
             Some(Err(e)) => break Some(SourceError::mcap(pos.min(fed), e)),
