@@ -5,7 +5,7 @@ use crate::mcap_io::{BagReader, MessageError, ReadError};
 use crate::replay::inputs::pose2;
 use crate::ros2::geometry_msgs::{PoseStamped, PoseWithCovarianceStamped};
 use crate::ros2::nav_msgs::Odometry;
-use crate::ros2::{AnyMessage, RosMessage};
+use crate::ros2::{type_name_matches, AnyMessage, RosMessage};
 use crate::trajectory::Trajectory;
 use crate::tum::{read_tum_file, TumError};
 use serde::Serialize;
@@ -86,15 +86,19 @@ pub fn load_trajectory(path: &Path, topic: Option<&str>) -> Result<Trajectory, E
         PoseStamped::type_name(),
         Odometry::type_name(),
     ];
-    if let Some(other) = bag
-        .topics()
-        .iter()
-        .find(|i| i.topic == topic && !pose_types.contains(&i.type_name.as_str()))
-    {
+    if let Some(other) = bag.topics().iter().find(|i| {
+        i.topic == topic
+            && !pose_types
+                .iter()
+                .any(|p| type_name_matches(p, &i.type_name))
+    }) {
         return Err(EvaluateError::NotPoses {
             path: path.display().to_string(),
             topic: topic.into(),
-            type_name: other.type_name.clone(),
+            type_name: match other.type_name.as_str() {
+                "" => "messages without a schema".into(),
+                name => name.into(),
+            },
             expected: pose_types.join(", "),
         });
     }

@@ -67,7 +67,7 @@ impl BagMessage {
         self.check_encoding()?;
         let expected = T::DEF;
         let actual = &self.channel.type_name;
-        if *actual != expected.name && *actual != expected.short_name() {
+        if !crate::ros2::type_name_matches(expected.name, actual) {
             return Err(MessageError::WrongType {
                 path: self.channel.path.to_path_buf(),
                 topic: self.channel.topic.clone(),

@@ -19,7 +19,7 @@ pub mod summary;
 use crate::config::{Config, MotionSource};
 use crate::mcap_io::{BagMessage, BagReader, MessageError, ReadError, WriteError};
 use crate::ros2::geometry_msgs::TransformStamped;
-use crate::ros2::AnyMessage;
+use crate::ros2::{type_name_matches, AnyMessage};
 use crate::trajectory::{StampedPose, Trajectory};
 use ekf_core::ChiSquareGate;
 use ekf_core::{Motion, Pose2, WheelSpeeds};
@@ -259,20 +259,20 @@ pub fn replay(
         role,
         available: available(),
     };
-    let check_type = |topic: &str,
-                      expected: &[&str],
-                      what: &'static str|
-     -> Result<(), ReplayError> {
-        match topic_type(topic) {
-            Some(actual) if !expected.contains(&actual.as_str()) => Err(ReplayError::WrongType {
-                log: log_name.clone(),
-                topic: topic.into(),
-                actual,
-                expected: what,
-            }),
-            _ => Ok(()),
-        }
-    };
+    let check_type =
+        |topic: &str, expected: &[&str], what: &'static str| -> Result<(), ReplayError> {
+            match topic_type(topic) {
+                Some(actual) if !expected.iter().any(|e| type_name_matches(e, &actual)) => {
+                    Err(ReplayError::WrongType {
+                        log: log_name.clone(),
+                        topic: topic.into(),
+                        actual,
+                        expected: what,
+                    })
+                }
+                _ => Ok(()),
+            }
+        };
     let t = &config.topics;
 
     // Motion source.

@@ -23,7 +23,7 @@ pub enum DecodeError {
 
 /// True if `candidate` names `def`, either in full (`pkg/msg/Type`) or short (`pkg/Type`).
 fn names(def: &MsgDef, candidate: &str) -> bool {
-    candidate == def.name || candidate == def.short_name()
+    super::type_name_matches(def.name, candidate)
 }
 
 /// Declares [`AnyMessage`], its dispatch by type name and [`SUPPORTED`] in one list, so the

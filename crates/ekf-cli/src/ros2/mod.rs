@@ -30,6 +30,16 @@ pub use any::{AnyMessage, DecodeError, SUPPORTED};
 pub use cdr::CdrError;
 pub use schema::MsgDef;
 
+/// True if `candidate`, a type name from a bag's schema, names the type whose full name
+/// is `full` (`pkg/msg/Type`): in full, or in the short form `pkg/Type` of ROS 1-era and
+/// hand-made bags.
+pub fn type_name_matches(full: &str, candidate: &str) -> bool {
+    candidate == full
+        || full
+            .split_once("/msg/")
+            .is_some_and(|(pkg, ty)| candidate.split_once('/') == Some((pkg, ty)))
+}
+
 use serde::{de::DeserializeOwned, Serialize};
 
 /// A ROS 2 message type: its name, its definition and its CDR form.
@@ -92,3 +102,19 @@ stamped!(
     visualization_msgs::Marker,
     diagnostic_msgs::DiagnosticArray,
 );
+
+#[cfg(test)]
+mod tests {
+    use super::type_name_matches;
+
+    #[test]
+    fn type_names_match_in_full_or_short_form_only() {
+        let full = "geometry_msgs/msg/PoseStamped";
+        assert!(type_name_matches(full, full));
+        assert!(type_name_matches(full, "geometry_msgs/PoseStamped"));
+        assert!(!type_name_matches(full, "geometry_msgs/msg/Pose"));
+        assert!(!type_name_matches(full, "nav_msgs/PoseStamped"));
+        assert!(!type_name_matches(full, "geometry_msgs/srv/PoseStamped"));
+        assert!(!type_name_matches(full, ""));
+    }
+}
