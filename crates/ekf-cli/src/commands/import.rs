@@ -50,8 +50,8 @@ pub enum ImportCommandError {
     },
     /// The input has no record the importer reads (the output bag is empty).
     #[error(
-        "{path}: nothing to import: expected {expected} lines, found none \
-         ({unknown} lines of other record types, {comments} comment lines)"
+        "{path}: nothing to import: no {expected} line (other record types: {unknown}, \
+         comments: {comments}, PARAM: {params}, NEFF: {neff})"
     )]
     NoRecords {
         /// The input file.
@@ -62,6 +62,10 @@ pub enum ImportCommandError {
         unknown: u64,
         /// Comment lines.
         comments: u64,
+        /// `PARAM` lines.
+        params: u64,
+        /// `NEFF` lines.
+        neff: u64,
     },
     /// The output could not be written.
     #[error(transparent)]
@@ -142,6 +146,8 @@ pub fn import_log(
             },
             unknown: stats.unknown_lines,
             comments: stats.comment_lines,
+            params: stats.param_lines,
+            neff: stats.neff_lines,
         });
     }
     Ok(ImportSummary {
