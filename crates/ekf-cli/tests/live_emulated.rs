@@ -3,10 +3,13 @@
 //! `ekf replay` of the recording gives the same poses bit for bit. A silent device is an
 //! error naming its port.
 
+mod live_support;
+
 use ekf_cli::devices::sick::device::Sweep;
 use ekf_cli::devices::sick::RangeUnit;
 use ekf_cli::emulate::{Device, EmulatorOptions, Emulators, Fault, RobotSample};
 use ekf_cli::mcap_io::BagReader;
+use live_support::{assert_replay_gives_the_same_poses, ekf};
 use std::f64::consts::{FRAC_PI_2, TAU};
 use std::path::Path;
 use std::path::PathBuf;
@@ -102,10 +105,6 @@ fn start_emulators(dir: &Path, unit: RangeUnit) -> Emulators {
     .unwrap()
 }
 
-fn ekf() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_ekf"))
-}
-
 /// Sends `ekf live` `signal` (`kill`'s spelling, e.g. `-TERM`) and waits for it to end.
 fn stop(mut live: std::process::Child, signal: &str) -> std::process::Output {
     let status = Command::new("kill")
@@ -122,16 +121,6 @@ fn stop(mut live: std::process::Child, signal: &str) -> std::process::Output {
         std::thread::sleep(Duration::from_millis(50));
     }
     live.wait_with_output().unwrap()
-}
-
-fn poses(path: &Path) -> Vec<(u64, Vec<u8>)> {
-    let bag = BagReader::open(path).unwrap();
-    bag.messages()
-        .unwrap()
-        .map(Result::unwrap)
-        .filter(|m| m.topic() == "/ekf/pose")
-        .map(|m| (m.log_time, m.data))
-        .collect()
 }
 
 #[test]
@@ -199,21 +188,7 @@ fn faults_reconnect_sigterm_and_bit_identical_replay() {
 
     // The recording is complete and replays to the same poses, bit for bit.
     let replayed = recording.with_file_name("replayed.mcap");
-    let out = ekf()
-        .arg("replay")
-        .arg(recording)
-        .arg("--out")
-        .arg(&replayed)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let live_poses = poses(recording);
-    assert!(live_poses.len() > 50, "{}", live_poses.len());
-    assert_eq!(live_poses, poses(&replayed));
+    assert_replay_gives_the_same_poses(recording, &replayed, &[], 50);
 }
 
 #[test]

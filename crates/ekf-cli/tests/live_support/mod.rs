@@ -1,0 +1,52 @@
+//! What the `ekf live` tests share: running the binary, and checking that `ekf replay`
+//! of a live recording gives its poses bit for bit.
+
+#![allow(dead_code)] // each test crate uses its own part
+
+use ekf_cli::mcap_io::BagReader;
+use std::path::Path;
+use std::process::Command;
+
+/// The `ekf` binary under test.
+pub fn ekf() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_ekf"))
+}
+
+/// `(log time, CDR bytes)` of every message on `topic` of a bag.
+pub fn messages(path: &Path, topic: &str) -> Vec<(u64, Vec<u8>)> {
+    BagReader::open(path)
+        .unwrap()
+        .messages()
+        .unwrap()
+        .map(Result::unwrap)
+        .filter(|m| m.topic() == topic)
+        .map(|m| (m.log_time, m.data))
+        .collect()
+}
+
+/// Replays `recording` (with `args`, e.g. `--config`) into `replayed` and asserts that
+/// the replay writes exactly the recording's `/ekf/pose` messages, of which there must
+/// be more than `min_poses`.
+pub fn assert_replay_gives_the_same_poses(
+    recording: &Path,
+    replayed: &Path,
+    args: &[&std::ffi::OsStr],
+    min_poses: usize,
+) {
+    let out = ekf()
+        .arg("replay")
+        .arg(recording)
+        .args(args)
+        .arg("--out")
+        .arg(replayed)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let live_poses = messages(recording, "/ekf/pose");
+    assert!(live_poses.len() > min_poses, "{}", live_poses.len());
+    assert_eq!(live_poses, messages(replayed, "/ekf/pose"));
+}
