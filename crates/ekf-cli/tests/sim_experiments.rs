@@ -149,25 +149,20 @@ fn the_laser_compass_filter_is_consistent_over_20_seeds() {
     }
     let nees = fig9::nees_summary(&runs, 3, |n| n.pose).unwrap();
     assert!((nees.band[0] - 2.024).abs() < 1e-3 && (nees.band[1] - 4.165).abs() < 1e-3);
-    // The time average is inside the band; per step, the ensemble average should be
-    // inside at 95 % of steps for a perfectly consistent filter. This one is inside at
-    // about 84 % and above the band at about 12 % (the first-scan map's fixed errors,
-    // docs/RESULTS.md); the bounds guard that from getting worse.
-    assert!(nees.inside, "{nees:?}");
-    assert!(
-        nees.steps_inside >= 0.8 && nees.steps_above <= 0.15,
-        "{nees:?}"
-    );
-    // By part: the heading, which the compass measures in the true frame, is consistent;
-    // what overconfidence there is lies in the position, which the map's walls fix.
+    // Per step, the ensemble average should be inside the band at 95 % of steps for a
+    // consistent filter; the runs start off the truth by an error drawn from the initial
+    // covariance, and the first-scan walls carry their fit error (measured: pose 94 %,
+    // position 96 %, heading 93 % of steps inside).
     let heading = fig9::nees_summary(&runs, 1, |n| n.heading).unwrap();
     let position = fig9::nees_summary(&runs, 2, |n| n.position).unwrap();
-    assert!(heading.inside && heading.steps_inside >= 0.9, "{heading:?}");
-    assert!(position.inside, "{position:?}");
-    assert!(
-        position.steps_above > heading.steps_above,
-        "{position:?} {heading:?}"
-    );
+    for part in [&nees, &position, &heading] {
+        assert!(part.inside, "{part:?}");
+        assert!(part.steps_inside >= 0.9, "{part:?}");
+        assert!(
+            part.steps_above <= 0.06 && part.steps_below <= 0.06,
+            "{part:?}"
+        );
+    }
 }
 
 #[test]
@@ -283,15 +278,14 @@ fn a_user_map_becomes_the_room_and_the_resolution_sets_the_beams() {
 }
 
 #[test]
-fn with_the_exact_map_the_compass_no_longer_changes_the_position() {
+fn with_the_exact_map_both_laser_modes_place_the_robot_four_times_as_well() {
     // testdata/paper-room.json is the simulated room's walls.
     let text = std::fs::read_to_string(testdata("paper-room.json")).unwrap();
     let exact = lrf_lines::LineMap::from_json(&text).unwrap();
     assert_eq!(exact.segments, Room::paper().to_map().segments);
-    // The position comes from the distances to the walls, which do not depend on the
-    // heading: with exact walls, laser alone and laser + compass place the robot equally
-    // well (0.49 and 0.48 cm here), about twice as well as with the first-scan map, whose
-    // fitting errors both inherit (1.09 cm); the compass still fixes the heading.
+    // With exact walls, taken as exact, both place the robot about four times as well as
+    // with the first-scan map, whose fitting errors they inherit (0.27 and 0.25 cm against
+    // 1.1 cm); the compass still fixes the heading.
     let config = Config::preset("paper-robot").unwrap();
     let accuracy = |map: Option<PathBuf>, mode: &str| {
         let c = compare(
@@ -312,11 +306,11 @@ fn with_the_exact_map_the_compass_no_longer_changes_the_position() {
     );
     let first_scan = accuracy(None, "laser");
     assert!(
-        (both.position_rmse_m - laser.position_rmse_m).abs() < 2e-4,
+        both.position_rmse_m <= laser.position_rmse_m,
         "{laser:?} {both:?}"
     );
     assert!(
-        laser.position_rmse_m < 0.6 * first_scan.position_rmse_m,
+        laser.position_rmse_m < 0.4 * first_scan.position_rmse_m,
         "{laser:?} {first_scan:?}"
     );
     assert!(

@@ -13,6 +13,51 @@ use crate::validate::{all_finite, covariance, finite, non_negative, semi_definit
 use crate::{ChiSquareGate, Error, Pose2, Real};
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 
+/// Uncertain parameters `m` that a measurement depends on but the filter does not
+/// estimate (a Schmidt–Kalman "consider" filter; Schmidt 1966, Simon 2006 §7.5), e.g. the
+/// line `(ρ, β)` of a map wall that was itself measured. Their error is constant over
+/// time, so it must not be averaged away as measurement noise would be.
+///
+/// With `h(x, m)` linearised as `H δx + H_m δm`, the innovation of
+/// [`Ekf::update_considering`] has `Cov(δx, y) = P Hᵀ + X H_mᵀ` and
+/// `S = H P Hᵀ + H X H_mᵀ + H_m Xᵀ Hᵀ + H_m C H_mᵀ + R`, where `X = Cov(δx, δm)` and
+/// `C = Cov(δm)`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Considered<T: Real, const M: usize, const N: usize> {
+    /// `H_m = ∂h/∂m` at the current estimate (`M × N`).
+    pub jacobian: SMatrix<T, M, N>,
+    /// `X = Cov(δx, δm)`, the correlation of the state's error with the parameters'
+    /// (`3 × N`).
+    pub cross: SMatrix<T, 3, N>,
+    /// `C = Cov(δm)` (`N × N`, symmetric positive semi-definite).
+    pub covariance: SMatrix<T, N, N>,
+}
+
+/// What [`Ekf::update_considering`] did: the outcome, and the gain it used, so that the
+/// caller can carry its cross-covariances with other parameters along (see
+/// [`ConsideredUpdate::cross_after`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ConsideredUpdate<T: Real, const M: usize> {
+    /// Whether the measurement was fused, its NIS and the error transition `I − K H`.
+    pub outcome: UpdateOutcome<T>,
+    /// The gain `K = (P Hᵀ + X H_mᵀ) S⁻¹` (zero if the measurement was rejected).
+    pub gain: SMatrix<T, 3, M>,
+}
+
+impl<T: Real, const M: usize> ConsideredUpdate<T, M> {
+    /// The state's cross-covariance with some parameters `k` after this update:
+    /// `X_k⁺ = (I − K H) X_k − K H_m Cov(m, k)`, given `X_k = Cov(δx, δk)` before it and
+    /// `h_m_cov = H_m Cov(δm, δk)` (`M × N`; zero when `k` is independent of the
+    /// considered parameters `m`).
+    pub fn cross_after<const N: usize>(
+        &self,
+        cross: &SMatrix<T, 3, N>,
+        h_m_cov: &SMatrix<T, M, N>,
+    ) -> SMatrix<T, 3, N> {
+        self.outcome.transition * cross - self.gain * h_m_cov
+    }
+}
+
 /// The filter state: pose estimate `x = [x, y, θ]` and its covariance `P`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Ekf<T: Real> {
@@ -21,7 +66,8 @@ pub struct Ekf<T: Real> {
 }
 
 /// An innovation, computed without changing the filter: `y = z − h(x)` (angles wrapped),
-/// `S = H P Hᵀ + R`, and `NIS = yᵀ S⁻¹ y`.
+/// `S = H P Hᵀ + R` (plus the considered parameters' terms, see [`Considered`]), and
+/// `NIS = yᵀ S⁻¹ y`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Innovation<T: Real, const M: usize> {
     /// The innovation `y`.
@@ -36,16 +82,33 @@ pub struct Innovation<T: Real, const M: usize> {
     pub nis: T,
     /// `S⁻¹`, reused by the gain.
     s_inv: SMatrix<T, M, M>,
+    /// `X H_mᵀ`: the state error's correlation with the considered parameters' part of
+    /// the innovation (zero without them).
+    correlation: SMatrix<T, 3, M>,
+    /// `H_m C H_mᵀ`: the considered parameters' part of `S` (zero without them).
+    considered_noise: SMatrix<T, M, M>,
 }
 
 /// What an update did.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct UpdateOutcome<T> {
+pub struct UpdateOutcome<T: Real> {
     /// `true` if the measurement passed the gate and was fused; `false` if it was
     /// rejected and the state is unchanged.
     pub accepted: bool,
     /// Its normalised innovation squared.
     pub nis: T,
+    /// `I − K H`, which maps the state's error before the update onto its error after it
+    /// (the identity if the measurement was rejected). A cross-covariance `Cov(δx, δk)`
+    /// of the state with anything the measurement does not depend on becomes
+    /// `(I − K H) Cov(δx, δk)`.
+    pub transition: Matrix3<T>,
+}
+
+impl<T: Real, const M: usize> Innovation<T, M> {
+    /// `S⁻¹`: the gain of anything correlated with the innovation is `Cov(·, y) S⁻¹`.
+    pub fn s_inverse(&self) -> &SMatrix<T, M, M> {
+        &self.s_inv
+    }
 }
 
 impl<T: Real> Ekf<T> {
@@ -79,35 +142,41 @@ impl<T: Real> Ekf<T> {
     /// the covariance of the motion step in `(Δs, e, Δθ)` (distance, lateral displacement,
     /// turn) and `G` = [`Motion::noise_jacobian`]. For wheel noise `Σ = J Q Jᵀ` and
     /// `G Σ Gᵀ = W Q Wᵀ` exactly.
+    ///
+    /// Every prediction returns the transition Jacobian `A` it used: a cross-covariance
+    /// `Cov(δx, δm)` of the state with parameters the motion does not change becomes
+    /// `A Cov(δx, δm)`.
     pub fn predict(
         &mut self,
         motion: &Motion<T>,
         motion_covariance: &Matrix3<T>,
-    ) -> Result<(), Error> {
+    ) -> Result<Matrix3<T>, Error> {
         finite(motion.ds, "motion ds")?;
         finite(motion.dtheta, "motion dtheta")?;
         semi_definite(motion_covariance, "motion noise")?;
-        self.propagate(motion, motion_covariance);
-        Ok(())
+        Ok(self.propagate(motion, motion_covariance))
     }
 
     /// Eqs. 5–6 for a motion and a motion covariance already checked (finite, and
-    /// positive semi-definite by construction from validated noise parameters).
-    fn propagate(&mut self, motion: &Motion<T>, motion_covariance: &Matrix3<T>) {
+    /// positive semi-definite by construction from validated noise parameters); returns
+    /// `A`.
+    fn propagate(&mut self, motion: &Motion<T>, motion_covariance: &Matrix3<T>) -> Matrix3<T> {
         let lin = motion.linearize(&self.pose());
         let p = lin.a * self.p * lin.a.transpose() + lin.g * motion_covariance * lin.g.transpose();
         self.x = lin.next.to_vector();
         self.p = symmetrize(&p);
+        lin.a
     }
 
     /// Prediction from wheel speeds (eqs. 1–9): motion from the kinematics, noise
-    /// `W Q Wᵀ` with the corrected `W` and `Q = diag(δω_R² + σ₀², δω_L² + σ₀²)`.
+    /// `W Q Wᵀ` with the corrected `W` and `Q = diag(δω_R² + σ₀², δω_L² + σ₀²)`. Returns
+    /// `A` (see [`Ekf::predict`]).
     pub fn predict_wheels(
         &mut self,
         robot: &DiffDrive<T>,
         speeds: &WheelSpeeds<T>,
         noise: &WheelNoise<T>,
-    ) -> Result<(), Error> {
+    ) -> Result<Matrix3<T>, Error> {
         finite(speeds.left, "left wheel speed")?;
         finite(speeds.right, "right wheel speed")?;
         finite(speeds.dt, "dt")?;
@@ -119,25 +188,23 @@ impl<T: Real> Ekf<T> {
         // J Q Jᵀ with Q = diag(δω² + σ₀²) ≥ 0 is positive semi-definite by construction.
         let sigma = noise.motion_covariance(robot, speeds);
         all_finite(sigma.as_slice(), "motion noise")?;
-        self.propagate(&motion, &sigma);
-        Ok(())
+        Ok(self.propagate(&motion, &sigma))
     }
 
     /// Prediction from an odometry delta `(Δs, Δθ)` with the distance/rotation noise
-    /// model.
+    /// model. Returns `A` (see [`Ekf::predict`]).
     pub fn predict_odometry(
         &mut self,
         motion: &Motion<T>,
         noise: &OdometryNoise<T>,
-    ) -> Result<(), Error> {
+    ) -> Result<Matrix3<T>, Error> {
         finite(motion.ds, "motion ds")?;
         finite(motion.dtheta, "motion dtheta")?;
         noise.validated()?;
         // diag(σ_s², σ_e², σ_θ²) is positive semi-definite by construction.
         let sigma = noise.motion_covariance(motion);
         all_finite(sigma.as_slice(), "motion noise")?;
-        self.propagate(motion, &sigma);
-        Ok(())
+        Ok(self.propagate(motion, &sigma))
     }
 
     /// The innovation of a measurement at the current estimate, without changing the
@@ -146,6 +213,38 @@ impl<T: Real> Ekf<T> {
         &self,
         m: &Z,
     ) -> Result<Innovation<T, M>, Error> {
+        self.innovation_with(m, SMatrix::zeros(), SMatrix::zeros())
+    }
+
+    /// The innovation of a measurement that also depends on `considered` parameters (see
+    /// [`Considered`]), without changing the filter. Fails if the measurement, its noise
+    /// or the parameters' covariances are invalid.
+    pub fn innovation_considering<const M: usize, const N: usize, Z: Measurement<T, M>>(
+        &self,
+        m: &Z,
+        considered: &Considered<T, M, N>,
+    ) -> Result<Innovation<T, M>, Error> {
+        all_finite(
+            considered.jacobian.as_slice(),
+            "considered parameters' Jacobian",
+        )?;
+        all_finite(considered.cross.as_slice(), "considered cross-covariance")?;
+        semi_definite(&considered.covariance, "considered parameters' covariance")?;
+        let h_m = &considered.jacobian;
+        self.innovation_with(
+            m,
+            considered.cross * h_m.transpose(),
+            h_m * considered.covariance * h_m.transpose(),
+        )
+    }
+
+    /// The innovation with the considered parameters' terms `X H_mᵀ` and `H_m C H_mᵀ`.
+    fn innovation_with<const M: usize, Z: Measurement<T, M>>(
+        &self,
+        m: &Z,
+        correlation: SMatrix<T, 3, M>,
+        considered_noise: SMatrix<T, M, M>,
+    ) -> Result<Innovation<T, M>, Error> {
         let z = m.measured();
         all_finite(z.as_slice(), "measurement")?;
         let r = m.noise();
@@ -153,7 +252,10 @@ impl<T: Real> Ekf<T> {
         let (z_hat, h) = m.predict(&self.pose());
         let y = m.residual(&z, &z_hat);
         all_finite(y.as_slice(), "innovation")?;
-        let s = symmetrize(&(h * self.p * h.transpose() + r));
+        let h_corr = h * correlation;
+        let s = symmetrize(
+            &(h * self.p * h.transpose() + h_corr + h_corr.transpose() + considered_noise + r),
+        );
         let s_inv = spd_inverse(&s).ok_or(Error::NotPositiveDefinite {
             what: "innovation covariance",
         })?;
@@ -165,6 +267,8 @@ impl<T: Real> Ekf<T> {
             r,
             nis,
             s_inv,
+            correlation,
+            considered_noise,
         })
     }
 
@@ -177,37 +281,82 @@ impl<T: Real> Ekf<T> {
         m: &Z,
         gate: Option<&ChiSquareGate<T>>,
     ) -> Result<UpdateOutcome<T>, Error> {
-        if let Some(g) = gate {
-            if g.dof as usize != M {
-                return Err(Error::OutOfRange {
-                    what: "gate degrees of freedom",
-                    expected: "equal to the measurement dimension",
-                });
-            }
-        }
+        check_gate::<T, M>(gate)?;
         let innovation = self.innovation(m)?;
-        let accepted = gate.is_none_or(|g| g.accepts(innovation.nis));
-        if accepted {
-            self.apply(&innovation)?;
-        }
-        Ok(UpdateOutcome {
+        Ok(self.fuse_gated(&innovation, gate)?.0)
+    }
+
+    /// Schmidt–Kalman update of a measurement that also depends on `considered`
+    /// parameters (see [`Considered`]): the parameters keep their estimate and covariance,
+    /// and the state is updated with `K = (P Hᵀ + X H_mᵀ) S⁻¹`, `x = x⁻ + K y` and, in the
+    /// Joseph form that holds for any gain,
+    /// `P = (I − K H) P⁻ (I − K H)ᵀ − (I − K H) X H_mᵀ Kᵀ − K H_m Xᵀ (I − K H)ᵀ
+    /// + K (H_m C H_mᵀ + R) Kᵀ`, symmetrised. This is the state block of the Kalman update
+    /// of the state augmented with the parameters. With a zero `X` and `C` it equals
+    /// [`Ekf::update`]. Gating as there.
+    pub fn update_considering<const M: usize, const N: usize, Z: Measurement<T, M>>(
+        &mut self,
+        m: &Z,
+        considered: &Considered<T, M, N>,
+        gate: Option<&ChiSquareGate<T>>,
+    ) -> Result<ConsideredUpdate<T, M>, Error> {
+        check_gate::<T, M>(gate)?;
+        let innovation = self.innovation_considering(m, considered)?;
+        let (outcome, gain) = self.fuse_gated(&innovation, gate)?;
+        Ok(ConsideredUpdate { outcome, gain })
+    }
+
+    /// Fuses `inn` if it passes `gate`; returns the outcome and the gain used (zero if
+    /// rejected).
+    fn fuse_gated<const M: usize>(
+        &mut self,
+        inn: &Innovation<T, M>,
+        gate: Option<&ChiSquareGate<T>>,
+    ) -> Result<(UpdateOutcome<T>, SMatrix<T, 3, M>), Error> {
+        let accepted = gate.is_none_or(|g| g.accepts(inn.nis));
+        let (transition, gain) = if accepted {
+            self.apply(inn)?
+        } else {
+            (Matrix3::identity(), SMatrix::zeros())
+        };
+        let outcome = UpdateOutcome {
             accepted,
-            nis: innovation.nis,
-        })
+            nis: inn.nis,
+            transition,
+        };
+        Ok((outcome, gain))
     }
 
     /// Fuses an innovation computed at the current state (private: an innovation from an
     /// earlier state would be fused silently wrong; [`Ekf::update`] recomputes it).
-    fn apply<const M: usize>(&mut self, inn: &Innovation<T, M>) -> Result<(), Error> {
-        let k = self.p * inn.h.transpose() * inn.s_inv;
+    /// Returns `I − K H` and `K`.
+    fn apply<const M: usize>(
+        &mut self,
+        inn: &Innovation<T, M>,
+    ) -> Result<(Matrix3<T>, SMatrix<T, 3, M>), Error> {
+        let k = (self.p * inn.h.transpose() + inn.correlation) * inn.s_inv;
         let x = self.x + k * inn.y;
         let i_kh = Matrix3::identity() - k * inn.h;
-        let p = symmetrize(&(i_kh * self.p * i_kh.transpose() + k * inn.r * k.transpose()));
+        let cross = i_kh * inn.correlation * k.transpose();
+        let p = i_kh * self.p * i_kh.transpose() - cross - cross.transpose()
+            + k * (inn.considered_noise + inn.r) * k.transpose();
+        let p = symmetrize(&p);
         all_finite(x.as_slice(), "updated state")?;
         all_finite(p.as_slice(), "updated covariance")?;
         self.x = Pose2::from_vector(&x).to_vector();
         self.p = p;
-        Ok(())
+        Ok((i_kh, k))
+    }
+}
+
+/// Fails unless a gate's degrees of freedom equal the measurement's dimension `M`.
+fn check_gate<T: Real, const M: usize>(gate: Option<&ChiSquareGate<T>>) -> Result<(), Error> {
+    match gate {
+        Some(g) if g.dof as usize != M => Err(Error::OutOfRange {
+            what: "gate degrees of freedom",
+            expected: "equal to the measurement dimension",
+        }),
+        _ => Ok(()),
     }
 }
 

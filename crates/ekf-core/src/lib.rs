@@ -56,7 +56,7 @@ mod validate;
 
 pub use angle::{angle_diff, wrap_angle};
 pub use chi_square::{chi_square_cdf, chi_square_quantile, ChiSquareGate};
-pub use ekf::{Ekf, Innovation, UpdateOutcome};
+pub use ekf::{Considered, ConsideredUpdate, Ekf, Innovation, UpdateOutcome};
 pub use error::Error;
 pub use geometry::{Line, Pose2};
 pub use kinematics::{DiffDrive, Linearization, Motion, WheelSpeeds};

@@ -134,6 +134,28 @@ impl<T: Real> LaserLine<T> {
     }
 }
 
+impl<T: Real> LaserLine<T> {
+    /// The laser's position `(x_s, y_s)` in the world when the robot is at `pose`.
+    fn sensor_position(&self, pose: &Pose2<T>) -> (T, T) {
+        let (st, ct) = pose.theta.sin_cos();
+        let (mx, my) = (self.mount.x, self.mount.y);
+        (pose.x + ct * mx - st * my, pose.y + st * mx + ct * my)
+    }
+
+    /// The Jacobian of `h = (r̂, ψ̂)` with respect to the map line `(ρ, β)` at `pose`, for
+    /// a map whose walls are uncertain (see [`crate::Considered`]):
+    /// `∂r̂/∂ρ = sign(C)`, `∂r̂/∂β = sign(C)(x_s sin β − y_s cos β)`, `∂ψ̂/∂ρ = 0`,
+    /// `∂ψ̂/∂β = 1`, with `C = ρ − x_s cos β − y_s sin β`. It is invertible: a line seen
+    /// from a known pose gives the map line back.
+    pub fn map_jacobian(&self, pose: &Pose2<T>) -> Matrix2<T> {
+        let (sb, cb) = self.map_line.beta.sin_cos();
+        let (xs, ys) = self.sensor_position(pose);
+        let c = self.map_line.rho - xs * cb - ys * sb;
+        let sign = if c < T::zero() { -T::one() } else { T::one() };
+        Matrix2::new(sign, sign * (xs * sb - ys * cb), T::zero(), T::one())
+    }
+}
+
 impl<T: Real> Measurement<T, 2> for LaserLine<T> {
     fn measured(&self) -> Vector2<T> {
         Vector2::new(self.observed.rho, self.observed.beta)
@@ -142,9 +164,8 @@ impl<T: Real> Measurement<T, 2> for LaserLine<T> {
         let (st, ct) = pose.theta.sin_cos();
         let (sb, cb) = self.map_line.beta.sin_cos();
         let (mx, my) = (self.mount.x, self.mount.y);
-        // The sensor's position in the world, and its derivative with respect to θ.
-        let xs = pose.x + ct * mx - st * my;
-        let ys = pose.y + st * mx + ct * my;
+        let (xs, ys) = self.sensor_position(pose);
+        // The derivative of the sensor's position with respect to θ.
         let (dxs, dys) = (-st * mx - ct * my, ct * mx - st * my);
         let c = self.map_line.rho - xs * cb - ys * sb;
         let psi = self.map_line.beta - pose.theta - self.mount.theta;

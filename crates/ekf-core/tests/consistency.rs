@@ -68,14 +68,16 @@ fn run<T: Real>(steps: &[Step]) -> Result<(), TestCaseError> {
     let (mut lines_fused, mut lines_tried) = (0usize, 0usize);
     for s in steps {
         let result = match *s {
-            Step::Wheels(l, r, dt) => ekf.predict_wheels(
-                &robot,
-                &WheelSpeeds::new(c(l), c(r), c(dt)).unwrap(),
-                &wheel_noise,
-            ),
-            Step::Odometry(ds, dth) => {
-                ekf.predict_odometry(&Motion::new(c(ds), c(dth)).unwrap(), &odo_noise)
-            }
+            Step::Wheels(l, r, dt) => ekf
+                .predict_wheels(
+                    &robot,
+                    &WheelSpeeds::new(c(l), c(r), c(dt)).unwrap(),
+                    &wheel_noise,
+                )
+                .map(drop),
+            Step::Odometry(ds, dth) => ekf
+                .predict_odometry(&Motion::new(c(ds), c(dth)).unwrap(), &odo_noise)
+                .map(drop),
             Step::Compass(h, v) => ekf
                 .update(&Compass::new(c(h), c(v)).unwrap(), Some(&compass_gate))
                 .map(|o| {

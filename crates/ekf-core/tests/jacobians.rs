@@ -148,6 +148,26 @@ proptest! {
     }
 
     #[test]
+    fn line_map_jacobian(p in pose(), mnt in mount(), rho in 0.5..30.0, beta in -PI..PI) {
+        let at = |rho: f64, beta: f64| {
+            let map_line = Line::new(rho, beta).unwrap();
+            LaserLine::new(Line::new(1.0, 0.0).unwrap(), Matrix2::identity(), map_line, mnt).unwrap()
+        };
+        let m = at(rho, beta);
+        let (z, _) = m.predict(&p);
+        prop_assume!(z[0] > 1e-3);
+        let mut num = Matrix2::zeros();
+        for (k, (dr, db)) in [(H, 0.0), (0.0, H)].into_iter().enumerate() {
+            let (zu, _) = at(rho + dr, beta + db).predict(&p);
+            let (zd, _) = at(rho - dr, beta - db).predict(&p);
+            num[(0, k)] = (zu[0] - zd[0]) / (2.0 * H);
+            num[(1, k)] = angle_diff(zu[1], zd[1]) / (2.0 * H);
+        }
+        let h_m = m.map_jacobian(&p);
+        prop_assert!(close(&h_m, &num, TOL * (1.0 + rho)), "H_m {} vs {}", h_m, num);
+    }
+
+    #[test]
     fn compass_and_position_jacobians(p in pose(), hdg in -PI..PI) {
         let c = Compass::new(hdg, 1e-3).unwrap();
         let (z, h) = c.predict(&p);

@@ -23,7 +23,9 @@ pub use localizer::{
     StageClock,
 };
 pub use map::{LineMap, MapBuilder, MapBuilderParams, MapFormatError, MapSegment};
-pub use matching::{LineMatch, MatchParams, MatchResult, Matcher, RejectReason, Rejection};
+pub use matching::{
+    LineMatch, MatchParams, MatchResult, Matcher, RejectReason, Rejection, WallErrors,
+};
 pub use observed::ObservedLine;
 pub use point3d::pitched_scan_point;
 pub use scan::LaserScan;

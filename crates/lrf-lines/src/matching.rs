@@ -7,9 +7,35 @@ use crate::ObservedLine;
 use alloc::vec::Vec;
 use core::f64::consts::{PI, TAU};
 use core::fmt;
-use ekf_core::{angle_diff, ChiSquareGate, Ekf, Error, Innovation, LaserLine, Pose2};
+use ekf_core::{angle_diff, ChiSquareGate, Considered, Ekf, Error, Innovation, LaserLine, Pose2};
 use nalgebra::{Matrix2, Point2};
 use serde::{Deserialize, Serialize};
+
+/// What the matcher knows of the error of a map's walls beyond the map noise of
+/// [`MatchParams::line_noise`]: nothing for `()`. A wall with a considered error (see
+/// [`ekf_core::Considered`]) is gated with the innovation covariance that includes it, the
+/// same the filter then fuses the line with.
+pub trait WallErrors {
+    /// The error of wall `wall` as a line `model` sees it from `pose`, or `None` if it
+    /// has none.
+    fn considered(
+        &self,
+        wall: usize,
+        model: &LaserLine<f64>,
+        pose: &Pose2<f64>,
+    ) -> Option<Considered<f64, 2, 2>>;
+}
+
+impl WallErrors for () {
+    fn considered(
+        &self,
+        _wall: usize,
+        _model: &LaserLine<f64>,
+        _pose: &Pose2<f64>,
+    ) -> Option<Considered<f64, 2, 2>> {
+        None
+    }
+}
 
 /// Matching parameters.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -25,12 +51,13 @@ pub struct MatchParams {
     /// length of the observed segment projected onto the wall, so a short observed
     /// segment must lie mostly on the wall and a long one needs `min_overlap`. Default 0.5.
     pub min_overlap_fraction: f64,
-    /// Standard deviation of a map wall's distance `ρ` as the laser sees it (m): the map's
-    /// own error (walls placed from estimated poses, walls that are not perfectly straight
-    /// or flat) that no scan can average away. Added to the observed line's `R_rr`, so the
-    /// filter does not treat the map as exact. Default 0.02 m.
+    /// Standard deviation of a matched line's distance beyond its fit covariance (m),
+    /// added to the observed line's `R_rr`: a given map's own error (walls placed from
+    /// estimated poses), walls that are not perfectly straight or flat, the robot moving
+    /// during the sweep. A first-scan map's walls carry their fit error as a considered
+    /// error on top of this (see [`crate::Localizer::with_first_scan_map`]). Default 0.02 m.
     pub map_sigma_r: f64,
-    /// Standard deviation of a map wall's direction (rad), added to `R_ψψ`. Default 1°.
+    /// The same for the line's direction (rad), added to `R_ψψ`. Default 1°.
     pub map_sigma_psi: f64,
 }
 
@@ -271,6 +298,20 @@ impl Matcher {
         mount: &Pose2<f64>,
         out: &mut MatchResult,
     ) {
+        self.match_lines_with(observed, map, &(), ekf, mount, out);
+    }
+
+    /// [`match_lines`](Self::match_lines) against a map whose walls have the errors
+    /// `errors` (indexed like `map.segments`).
+    pub fn match_lines_with(
+        &self,
+        observed: &[ObservedLine],
+        map: &LineMap,
+        errors: &impl WallErrors,
+        ekf: &Ekf<f64>,
+        mount: &Pose2<f64>,
+        out: &mut MatchResult,
+    ) {
         out.clear(observed.len(), map.segments.len());
         out.walls.extend(map.segments.iter().map(WallCache::new));
         for (i, line) in observed.iter().enumerate() {
@@ -278,7 +319,7 @@ impl Matcher {
                 out.status[i] = Status::Unmatched(RejectReason::InvalidLine(e));
                 continue;
             }
-            self.gate_line(i, line, map, ekf, mount, out);
+            self.gate_line(i, line, map, errors, ekf, mount, out);
         }
         out.candidates.sort_unstable_by(|a, b| {
             a.nis
@@ -317,11 +358,13 @@ impl Matcher {
     /// Finds the candidate walls of one valid observed line and records why it has none.
     /// The cheap checks come first (NIS bounds, then overlap); the full innovation only
     /// for walls that pass both.
+    #[allow(clippy::too_many_arguments)]
     fn gate_line(
         &self,
         i: usize,
         line: &ObservedLine,
         map: &LineMap,
+        errors: &impl WallErrors,
         ekf: &Ekf<f64>,
         mount: &Pose2<f64>,
         out: &mut MatchResult,
@@ -335,13 +378,14 @@ impl Matcher {
         );
         let first = out.candidates.len();
         for (j, (segment, wall)) in map.segments.iter().zip(&out.walls).enumerate() {
-            if !pair.may_pass(segment, wall) {
+            let considered = pair.considered(j, segment, errors);
+            if considered.is_none() && !pair.may_pass(segment, wall) {
                 continue;
             }
             let Some(overlap) = overlap(wall, &pair.a, &pair.b, &self.params) else {
                 continue;
             };
-            if let Some(innovation) = pair.gated_innovation(segment) {
+            if let Some(innovation) = pair.gated_innovation(segment, considered.as_ref()) {
                 out.candidates.push(Candidate {
                     nis: innovation.nis,
                     observed: i,
@@ -365,8 +409,14 @@ impl Matcher {
             .iter()
             .zip(&out.walls)
             .enumerate()
-            .filter(|(_, (segment, wall))| pair.may_pass(segment, wall))
-            .filter_map(|(j, (segment, _))| pair.gated_innovation(segment).map(|n| (j, n.nis)))
+            .filter_map(|(j, (segment, wall))| {
+                let considered = pair.considered(j, segment, errors);
+                if considered.is_none() && !pair.may_pass(segment, wall) {
+                    return None;
+                }
+                let innovation = pair.gated_innovation(segment, considered.as_ref())?;
+                Some((j, innovation.nis))
+            })
             .min_by(|a, b| a.1.total_cmp(&b.1));
         if let Some((map, _)) = closest {
             out.status[i] = Status::Unmatched(RejectReason::NoOverlap { map });
@@ -433,15 +483,39 @@ impl<'a> PairGate<'a> {
         y_psi * y_psi <= threshold * self.s_psi && y_r * y_r <= threshold * self.s_r_max
     }
 
-    /// The pair's innovation (ekf-core's [`LaserLine`] model) if it passes the gate.
-    fn gated_innovation(&self, segment: &MapSegment) -> Option<Innovation<f64, 2>> {
-        let model = LaserLine {
+    /// The line model of the pair, with the line's measurement noise `R`.
+    fn model(&self, segment: &MapSegment) -> LaserLine<f64> {
+        LaserLine {
             observed: self.line.line,
             covariance: self.noise,
             map_line: segment.line,
             mount: *self.mount,
-        };
-        let innovation = self.ekf.innovation(&model).ok()?;
+        }
+    }
+
+    /// The considered error of wall `j`, if `errors` has one.
+    fn considered(
+        &self,
+        j: usize,
+        segment: &MapSegment,
+        errors: &impl WallErrors,
+    ) -> Option<Considered<f64, 2, 2>> {
+        errors.considered(j, &self.model(segment), &self.ekf.pose())
+    }
+
+    /// The pair's innovation (ekf-core's [`LaserLine`] model) if it passes the gate, with
+    /// the wall's considered error if it has one.
+    fn gated_innovation(
+        &self,
+        segment: &MapSegment,
+        considered: Option<&Considered<f64, 2, 2>>,
+    ) -> Option<Innovation<f64, 2>> {
+        let model = self.model(segment);
+        let innovation = match considered {
+            Some(c) => self.ekf.innovation_considering(&model, c),
+            None => self.ekf.innovation(&model),
+        }
+        .ok()?;
         self.gate.accepts(innovation.nis).then_some(innovation)
     }
 }

@@ -146,8 +146,12 @@ fn a_lap_with_a_known_map_stays_accurate_and_consistent() {
 
 #[test]
 fn a_lap_with_the_first_scan_map_stays_accurate() {
-    let mut localizer =
-        Localizer::with_first_scan_map(config(), start(), initial_covariance()).unwrap();
+    // The robot is set down on its start mark (to 1 mm and 0.1°), and the first-scan map
+    // is placed there: a looser prior would say the map may be rotated by as much, and
+    // the filter would rightly hedge against an error that this run does not have.
+    let on_the_mark =
+        Matrix3::from_diagonal(&Vector3::new(1e-6, 1e-6, 0.1_f64.to_radians().powi(2)));
+    let mut localizer = Localizer::with_first_scan_map(config(), start(), on_the_mark).unwrap();
     let mut rng = Rng::new(99);
     let r = ranges(&start(), &walls(), &mut rng);
     let report = localizer.update_scan(&scan(&r)).unwrap();
@@ -168,10 +172,10 @@ fn a_lap_with_the_first_scan_map_stays_accurate() {
     );
     // The left wall is not in this map: facing it, the heading rests on the compass
     // (σ = 2°) and the biased odometry alone, hence the looser heading bound. The map is
-    // one noisy scan, and the default map noise (2 cm, 1°) says so: the filter leans on
-    // it less than on an exact map and stays consistent (without the map noise: max
-    // 4.2 cm but only 54 of 480 steps inside the 99 % bound; with it, measured: max
-    // 8.1 cm, rms 2.7 cm, 480 of 480).
+    // one noisy scan, and each wall carries its fit error as a considered error, so the
+    // filter stays consistent (measured: max 8.3 cm, rms 2.7 cm, 480 of 480 steps inside
+    // the 99 % bound; with the walls' error as fresh noise on every scan and no map noise,
+    // only 54 of 480 were).
     assert!(lap.consistent_steps * 100 >= lap.scans * 95, "{summary}");
     assert!(lap.max_position_error < 0.10, "{summary}");
     assert!(lap.rms_position_error < 0.03, "{summary}");
@@ -300,4 +304,98 @@ fn odometry_prediction_moves_the_pose_and_grows_the_covariance() {
         Err(LocalizerError::Filter(_))
     ));
     assert_eq!(localizer.pose(), pose);
+}
+
+#[test]
+fn a_robot_standing_still_learns_nothing_from_the_map_its_first_scan_made() {
+    // The first scan places the walls at the pose the robot believes it has, so later
+    // scans from the same spot can only confirm where the robot is relative to them: the
+    // gain is K = P0 (Hᵀ + Gᵀ H_mᵀ) S⁻¹ = 0 exactly (G = −H_m⁻¹ H). Treating the walls'
+    // error as fresh noise on every scan would shrink P for nothing.
+    let mut rng = Rng::new(5);
+    let p0 = initial_covariance();
+    let mut localizer = Localizer::with_first_scan_map(config(), start(), p0).unwrap();
+    let first = localizer
+        .update_scan(&scan(&ranges(&start(), &walls(), &mut rng)))
+        .unwrap();
+    assert!(first.map_built);
+    let mut fused = 0;
+    for _ in 0..20 {
+        let report = localizer
+            .update_scan(&scan(&ranges(&start(), &walls(), &mut rng)))
+            .unwrap();
+        fused += report.fused;
+    }
+    assert!(fused >= 40, "{fused} lines fused");
+    let (pose, p) = (localizer.pose(), *localizer.covariance());
+    let moved = (pose.to_vector() - start().to_vector()).amax();
+    assert!(moved < 1e-12, "moved by {moved}");
+    assert!((p - p0).amax() < 1e-12 * p0.amax(), "{p} vs {p0}");
+
+    // The same walls given as a map are taken as exact up to the map noise, fresh on
+    // every scan: P shrinks.
+    let map = localizer.map().clone();
+    let mut given = Localizer::new(config(), start(), p0, map).unwrap();
+    for _ in 0..20 {
+        given
+            .update_scan(&scan(&ranges(&start(), &walls(), &mut rng)))
+            .unwrap();
+    }
+    assert!(
+        given.covariance()[(0, 0)] < 0.5 * p0[(0, 0)],
+        "{}",
+        given.covariance()
+    );
+}
+
+#[test]
+fn a_compass_turns_a_first_scan_map_placed_with_a_heading_error_into_its_frame() {
+    // The robot believes it faces 2° left of where it does, and places the first-scan map
+    // there, turned by 2°. The compass measures the true heading: the filter estimates the
+    // placement's error with the pose and turns the map back, rigidly.
+    let error = 2.0_f64.to_radians();
+    let truth = start();
+    let believed = Pose2::new(truth.x, truth.y, truth.theta + error);
+    let p0 = Matrix3::from_diagonal(&Vector3::new(1e-6, 1e-6, error * error));
+    let mut rng = Rng::new(11);
+    let mut localizer = Localizer::with_first_scan_map(config(), believed, p0).unwrap();
+    localizer
+        .update_scan(&scan(&ranges(&truth, &walls(), &mut rng)))
+        .unwrap();
+    let placed = localizer.map().clone();
+    for _ in 0..50 {
+        let compass = localizer
+            .update_compass_with_variance(truth.theta, 0.1_f64.to_radians().powi(2))
+            .unwrap();
+        assert!(compass.accepted);
+        localizer
+            .update_scan(&scan(&ranges(&truth, &walls(), &mut rng)))
+            .unwrap();
+    }
+    let heading_error = angle_diff(localizer.pose().theta, truth.theta).to_degrees();
+    assert!(
+        heading_error.abs() < 0.05,
+        "heading off by {heading_error}°"
+    );
+    let position_error = (localizer.pose().to_vector() - truth.to_vector())
+        .xy()
+        .norm();
+    assert!(position_error < 0.002, "position off by {position_error} m");
+    for (before, after) in placed.segments.iter().zip(&localizer.map().segments) {
+        let turned = angle_diff(after.line.beta, before.line.beta).to_degrees();
+        assert!((turned + 2.0).abs() < 0.05, "wall turned by {turned}°");
+    }
+    // Turned about the robot's position, where it stood when it placed them.
+    let p = truth.to_vector().xy();
+    let distance = |s: &lrf_lines::MapSegment| {
+        (s.line.rho
+            - p.dot(&nalgebra::Vector2::new(
+                s.line.beta.cos(),
+                s.line.beta.sin(),
+            )))
+        .abs()
+    };
+    for (before, after) in placed.segments.iter().zip(&localizer.map().segments) {
+        assert!((distance(before) - distance(after)).abs() < 0.002);
+    }
 }

@@ -17,6 +17,7 @@ use crate::mcap_io::{BagWriter, WriteError};
 use crate::ros2::build::{odometry, MAP_FRAME};
 use crate::sim::{Sample, Scenario, Simulator};
 use ekf_core::{angle_diff, wrap_angle, Pose2};
+use lrf_lines::MatchParams;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -131,6 +132,11 @@ pub fn live_config(scenario: &Scenario) -> Result<Config, ConfigError> {
     c.localizer.robot.track = robot.track;
     c.localizer.wheel_noise.delta = robot.delta;
     c.localizer.laser_mount = laser.mount;
+    // Live, a scan is a sweep while the robot moves, stamped when it was measured and
+    // fused at the pose of that instant, from serial reads that jitter: errors that the
+    // simulation's instant scans do not have. Keep the default map noise for them.
+    c.localizer.matching.map_sigma_r = MatchParams::default().map_sigma_r;
+    c.localizer.matching.map_sigma_psi = MatchParams::default().map_sigma_psi;
     c.localizer.extraction.range_sigma = laser.range_sigma;
     c.localizer.extraction.bearing_sigma = laser.bearing_sigma;
     // The register holds tenths of a degree: rounding adds (0.1°)²/12 to the noise.

@@ -18,6 +18,8 @@ pub enum Stream {
     Compass = 2,
     /// Laser range and bearing noise and invalid returns.
     Laser = 3,
+    /// The error of the in-loop estimator's initial pose.
+    InitialPose = 4,
 }
 
 /// A seeded random source for one [`Stream`].

@@ -3,6 +3,7 @@
 //! `ekf replay` runs) fuses what they measure, and a [`LogRecorder`] may write it all.
 
 use super::log::LogRecorder;
+use super::rng::{SimRng, Stream};
 use super::scenario::Scenario;
 use super::sensors::{CompassReading, LASER_RANGE_MIN};
 use super::stepper::Simulator;
@@ -30,11 +31,25 @@ pub struct Estimator {
     pub mode: Mode,
     /// Its configuration.
     pub config: LocalizerConfig,
-    /// Initial standard deviations of position (m) and heading (rad); it starts at the
-    /// true pose.
+    /// Initial standard deviations of position (m) and heading (rad). It starts at the
+    /// true pose plus an error drawn from them (see [`Estimator::initial_estimate`]).
     pub initial_sigma: (f64, f64),
     /// Its map; `None`: the lines of the first scan, as in the paper.
     pub map: Option<LineMap>,
+}
+
+impl Estimator {
+    /// Where the estimator starts when the robot is at `truth`: `truth + e` with
+    /// `e ~ N(0, diag(σ_xy², σ_xy², σ_θ²))` drawn from the seed's own stream, as the
+    /// consistency test (Bar-Shalom et al. 2001, §5.4.2) needs: an initial error that the
+    /// initial covariance describes. A robot set down at a surveyed pose is off it by as
+    /// much; a first-scan map placed at the estimate inherits the error.
+    pub fn initial_estimate(&self, truth: &Pose2<f64>, seed: u64) -> Pose2<f64> {
+        let mut rng = SimRng::new(seed, Stream::InitialPose);
+        let (sxy, sth) = self.initial_sigma;
+        let (dx, dy, dth) = (rng.normal(sxy), rng.normal(sxy), rng.normal(sth));
+        Pose2::new(truth.x + dx, truth.y + dy, truth.theta + dth)
+    }
 }
 
 /// How a run is made.
@@ -119,6 +134,9 @@ pub struct SimResult {
     pub stats: SimStats,
     /// The estimator's map at the end (`None` without an estimator).
     pub map: Option<LineMap>,
+    /// Where the estimator started (`None` without an estimator); see
+    /// [`Estimator::initial_estimate`].
+    pub initial_estimate: Option<Pose2<f64>>,
 }
 
 /// The normalised estimation error squared of one estimate, whole and by part, with
@@ -175,7 +193,11 @@ pub fn simulate(
     let start = scenario.start;
     let mut sim = Simulator::new(scenario, options.seed);
     let mut filter = match &options.estimator {
-        Some(e) => Some(InLoop::new(e, start, scenario)?),
+        Some(e) => Some(InLoop::new(
+            e,
+            e.initial_estimate(&start, options.seed),
+            scenario,
+        )?),
         None => None,
     };
     let compass_variance = scenario.compass.sigma.powi(2);
@@ -190,6 +212,7 @@ pub fn simulate(
             ..SimStats::default()
         },
         map: None,
+        initial_estimate: filter.as_ref().map(|f| f.localizer.pose()),
     };
     let mut last_ticks = [0i64; 2];
     for k in 0..=scenario.steps() {
@@ -248,14 +271,14 @@ struct InLoop {
 }
 
 impl InLoop {
-    fn new(e: &Estimator, start: Pose2<f64>, scenario: &Scenario) -> Result<Self, SimError> {
+    fn new(e: &Estimator, initial: Pose2<f64>, scenario: &Scenario) -> Result<Self, SimError> {
         let mut config = e.config.clone();
         config.laser_mount = scenario.laser.mount;
         let (sxy, sth) = e.initial_sigma;
         let p0 = Matrix3::from_diagonal(&Vector3::new(sxy * sxy, sxy * sxy, sth * sth));
         let localizer = match &e.map {
-            Some(map) => Localizer::new(config, start, p0, map.clone())?,
-            None => Localizer::with_first_scan_map(config, start, p0)?,
+            Some(map) => Localizer::new(config, initial, p0, map.clone())?,
+            None => Localizer::with_first_scan_map(config, initial, p0)?,
         };
         Ok(Self {
             localizer,

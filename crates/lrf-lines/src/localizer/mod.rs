@@ -4,15 +4,18 @@
 
 mod config;
 mod error;
+mod map_errors;
 
 pub use config::{CompassConfig, LocalizerConfig};
 pub use error::LocalizerError;
 
-use crate::{LaserScan, LineExtractor, LineMap, MatchResult, Matcher, ObservedLine};
+use map_errors::MapErrors;
+
+use crate::{LaserScan, LineExtractor, LineMap, MatchResult, Matcher, ObservedLine, WallErrors};
 use alloc::vec::Vec;
 use ekf_core::{
-    ChiSquareGate, Compass, DiffDrive, Ekf, LaserLine, Motion, Pose2, Position, UpdateOutcome,
-    WheelNoise, WheelSpeeds,
+    ChiSquareGate, Compass, DiffDrive, Ekf, LaserLine, Measurement, Motion, Pose2, Position,
+    UpdateOutcome, WheelNoise, WheelSpeeds,
 };
 use nalgebra::{Matrix2, Matrix3};
 
@@ -132,6 +135,8 @@ pub struct Localizer {
     config: LocalizerConfig,
     ekf: Ekf<f64>,
     map: LineMap,
+    /// The first-scan map's wall errors (empty for a given map).
+    map_errors: MapErrors,
     build_map_from_next_scan: bool,
     extractor: LineExtractor,
     matcher: Matcher,
@@ -174,6 +179,7 @@ impl Localizer {
             config,
             ekf,
             map,
+            map_errors: MapErrors::default(),
             build_map_from_next_scan: false,
             extractor,
             matcher,
@@ -188,6 +194,14 @@ impl Localizer {
     /// [`update_scan`](Self::update_scan) becomes the map, its lines placed in the world
     /// at the then current pose ⊕ laser mount ([`LineMap::from_scan`]). Later scans are
     /// matched against it.
+    ///
+    /// Each wall of that map is only as good as the line it was fitted to and the pose it
+    /// was placed from, and that error stays the same however often the wall is seen
+    /// again. The filter carries it as a considered (not estimated) parameter of the wall
+    /// (Schmidt–Kalman; see [`ekf_core::Considered`]): with the line's fit covariance and
+    /// the covariance of the pose at the first scan, and its correlation with the state
+    /// through every later step. A given map ([`Localizer::new`]) has no such model; its
+    /// error is the matching's map noise, added to each line's `R`.
     pub fn with_first_scan_map(
         config: LocalizerConfig,
         initial_pose: Pose2<f64>,
@@ -202,16 +216,22 @@ impl Localizer {
     /// Prediction from wheel speeds (paper eqs. 1–9) with the configured robot and wheel
     /// noise: `x⁻ = f(x, u)`, `P⁻ = A P Aᵀ + W Q Wᵀ`.
     pub fn predict_wheels(&mut self, speeds: &WheelSpeeds<f64>) -> Result<(), LocalizerError> {
-        self.ekf
+        let a = self
+            .ekf
             .predict_wheels(&self.config.robot, speeds, &self.config.wheel_noise)
-            .map_err(LocalizerError::Filter)
+            .map_err(LocalizerError::Filter)?;
+        self.map_errors.predicted(&a);
+        Ok(())
     }
 
     /// Prediction from an odometry delta `(Δs, Δθ)` with the configured odometry noise.
     pub fn predict_odometry(&mut self, motion: &Motion<f64>) -> Result<(), LocalizerError> {
-        self.ekf
+        let a = self
+            .ekf
             .predict_odometry(motion, &self.config.odometry_noise)
-            .map_err(LocalizerError::Filter)
+            .map_err(LocalizerError::Filter)?;
+        self.map_errors.predicted(&a);
+        Ok(())
     }
 
     /// Fuses a compass heading `φ` (rad, map frame; see
@@ -230,9 +250,7 @@ impl Localizer {
         variance: f64,
     ) -> Result<UpdateOutcome<f64>, LocalizerError> {
         let compass = Compass::new(heading, variance).map_err(LocalizerError::Filter)?;
-        self.ekf
-            .update(&compass, Some(&self.compass_gate))
-            .map_err(LocalizerError::Filter)
+        self.update_state(&compass, Some(&self.compass_gate.clone()))
     }
 
     /// Fuses an absolute position `(x, y)` in the map frame (m) with covariance
@@ -247,9 +265,27 @@ impl Localizer {
         gate: Option<&ChiSquareGate<f64>>,
     ) -> Result<UpdateOutcome<f64>, LocalizerError> {
         let position = Position::new(x, y, covariance).map_err(LocalizerError::Filter)?;
-        self.ekf
-            .update(&position, gate)
-            .map_err(LocalizerError::Filter)
+        self.update_state(&position, gate)
+    }
+
+    /// Fuses a measurement of the state alone, and lets a first-scan map's placement take
+    /// its share (see [`Localizer::with_first_scan_map`]).
+    fn update_state<const M: usize>(
+        &mut self,
+        measurement: &impl Measurement<f64, M>,
+        gate: Option<&ChiSquareGate<f64>>,
+    ) -> Result<UpdateOutcome<f64>, LocalizerError> {
+        let innovation = self
+            .ekf
+            .innovation(measurement)
+            .map_err(LocalizerError::Filter)?;
+        let outcome = self
+            .ekf
+            .update(measurement, gate)
+            .map_err(LocalizerError::Filter)?;
+        self.map_errors
+            .state_measured(&innovation, &outcome, &mut self.map);
+        Ok(outcome)
     }
 
     /// One laser step: extract, match at the predicted state, fuse sequentially (see the
@@ -279,16 +315,26 @@ impl Localizer {
             ..ScanReport::default()
         };
         if self.build_map_from_next_scan {
-            self.map = LineMap::from_scan(&self.lines, &self.sensor_pose())
+            let (map, sources) = LineMap::from_scan_with_sources(&self.lines, &self.sensor_pose())
                 .map_err(LocalizerError::Filter)?;
+            self.map_errors = MapErrors::of_first_scan(
+                &map,
+                &self.lines,
+                &sources,
+                &self.ekf.pose(),
+                self.ekf.covariance(),
+                &self.config.laser_mount,
+            );
+            self.map = map;
             self.build_map_from_next_scan = false;
             self.clear_matches();
             report.map_built = true;
             return Ok(report);
         }
-        self.matcher.match_lines(
+        self.matcher.match_lines_with(
             &self.lines,
             &self.map,
+            &self.map_errors,
             &self.ekf,
             &self.config.laser_mount,
             &mut self.matches,
@@ -297,10 +343,12 @@ impl Localizer {
         report.matched = self.matches.matches().len();
         report.rejected = self.matches.rejections().len();
         let before = self.ekf;
+        self.map_errors.save(&self.map);
         let fused = self.fuse_matches(&mut report);
         clock.stage_done(ScanStage::Update);
         if let Err(e) = fused {
             self.ekf = before;
+            self.map_errors.restore(&mut self.map);
             self.fusions.clear();
             return Err(LocalizerError::Filter(e));
         }
@@ -310,7 +358,8 @@ impl Localizer {
     /// Step 3 of a scan update: fuses the matches in order, each re-linearised at the
     /// current state and re-gated; counts and records what happened to each.
     fn fuse_matches(&mut self, report: &mut ScanReport) -> Result<(), ekf_core::Error> {
-        for m in self.matches.matches() {
+        for i in 0..self.matches.matches().len() {
+            let m = self.matches.matches()[i];
             let (Some(line), Some(wall)) =
                 (self.lines.get(m.observed), self.map.segments.get(m.map))
             else {
@@ -322,7 +371,7 @@ impl Localizer {
                 map_line: wall.line,
                 mount: self.config.laser_mount,
             };
-            let outcome = self.ekf.update(&model, Some(self.matcher.gate()))?;
+            let outcome = self.fuse_line(m.map, &model)?;
             if outcome.accepted {
                 report.fused += 1;
             } else {
@@ -336,6 +385,26 @@ impl Localizer {
             });
         }
         Ok(())
+    }
+
+    /// Fuses one line matched to wall `wall`, with the wall's error considered if the map
+    /// has an error model (a first-scan map), and carries the state's correlation with
+    /// the walls along.
+    fn fuse_line(
+        &mut self,
+        wall: usize,
+        model: &LaserLine<f64>,
+    ) -> Result<UpdateOutcome<f64>, ekf_core::Error> {
+        let gate = Some(self.matcher.gate());
+        let pose = self.ekf.pose();
+        let Some(considered) = self.map_errors.considered(wall, model, &pose) else {
+            return self.ekf.update(model, gate);
+        };
+        let innovation = self.ekf.innovation_considering(model, &considered)?;
+        let update = self.ekf.update_considering(model, &considered, gate)?;
+        self.map_errors
+            .line_fused(wall, &innovation, &considered, &update, &mut self.map);
+        Ok(update.outcome)
     }
 
     /// Empties the match result (after a scan that was not matched).

@@ -110,19 +110,32 @@ impl LineMap {
     /// whose projected end points coincide are skipped. Fails if the pose or a line is not
     /// finite.
     pub fn from_scan(lines: &[ObservedLine], sensor_pose: &Pose2<f64>) -> Result<Self, Error> {
+        Self::from_scan_with_sources(lines, sensor_pose).map(|(map, _)| map)
+    }
+
+    /// [`LineMap::from_scan`], and for each wall the index in `lines` of the line it was
+    /// placed from.
+    pub fn from_scan_with_sources(
+        lines: &[ObservedLine],
+        sensor_pose: &Pose2<f64>,
+    ) -> Result<(Self, Vec<usize>), Error> {
         sensor_pose.validated("sensor pose")?;
         let mut segments = Vec::with_capacity(lines.len());
-        for observed in lines {
+        let mut sources = Vec::with_capacity(lines.len());
+        for (i, observed) in lines.iter().enumerate() {
             let line = Line::new(observed.line.rho, observed.line.beta)?.from_frame(sensor_pose);
             let a = line.project(&sensor_pose.transform_point(&observed.start));
             let b = line.project(&sensor_pose.transform_point(&observed.end));
             match MapSegment::from_points(a, b) {
-                Ok(segment) => segments.push(segment),
+                Ok(segment) => {
+                    segments.push(segment);
+                    sources.push(i);
+                }
                 Err(Error::OutOfRange { .. }) => {} // zero length: not a wall
                 Err(e) => return Err(e),
             }
         }
-        Ok(Self::new(segments))
+        Ok((Self::new(segments), sources))
     }
 
     /// A map built from a whole run: every scan's lines with the sensor pose they were

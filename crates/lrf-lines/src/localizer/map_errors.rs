@@ -1,0 +1,380 @@
+//! The error of a map built from the first scan, carried as the Localizer runs.
+//!
+//! A wall placed from a scan line `z = (r, ψ)` seen from the pose `x_b` has the error
+//! `δm = G δx_b + F δz`, with `F = H_m⁻¹` and `G = −H_m⁻¹ H` from the line model `h(x, m)`
+//! at the placement (a line seen from a known pose gives the map line back). The two
+//! parts are treated differently:
+//! - the placement error `b = δx_b`, shared by every wall (the whole map is shifted and
+//!   turned with it), is **estimated**: its estimate is applied to the map at once, moving
+//!   it rigidly, so what is carried is its covariance `P_bb` and its correlation `P_xb`
+//!   with the state. At the placement the state's error is `b` itself
+//!   (`P_xb = P_bb = P`). A compass, which measures the heading in its own frame, thus
+//!   turns the map into that frame as the run goes on; a position fix shifts it;
+//! - each wall's fit error `f_j = F δz_j`, covariance `C_j = F R_j Fᵀ`, is **considered**
+//!   (Schmidt–Kalman, see [`ekf_core::Considered`]): not estimated, since it is different
+//!   for every wall, but carried through its correlations `X_j = Cov(δx, f_j)` and
+//!   `Y_j = Cov(b, f_j)`, so the filter cannot average it away as it would fresh noise.
+//!
+//! A line matched to wall `j` measures `h(x, m_j)` with `δm_j = G_j b + f_j`; every
+//! update of the state (`x ← x + K y`, gain `K` from [`ekf_core::Ekf`]) updates the
+//! placement with `K_b = Cov(b, y) S⁻¹` as the augmented Kalman filter would.
+
+use crate::{LineMap, MapSegment, ObservedLine, WallErrors};
+use alloc::vec::Vec;
+use ekf_core::{
+    Considered, ConsideredUpdate, Innovation, LaserLine, Line, Measurement, Pose2, UpdateOutcome,
+};
+use nalgebra::{Matrix2, Matrix2x3, Matrix3, Matrix3x2, Vector3};
+
+/// One wall's error.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct WallError {
+    /// `C = F R Fᵀ`: the wall's own (fit) error, independent of every other wall's.
+    own: Matrix2<f64>,
+    /// `G = ∂(ρ, β)/∂(x, y, θ)` of the placement pose.
+    placement: Matrix2x3<f64>,
+    /// `X = Cov(δx, f)`: the state's error correlated with the wall's fit error.
+    cross: Matrix3x2<f64>,
+    /// `Y = Cov(b, f)`: the placement's error correlated with the wall's fit error.
+    placement_cross: Matrix3x2<f64>,
+}
+
+/// The errors of a first-scan map's walls and their correlation with the state, indexed
+/// like the map's segments; none (the default) for a given map.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct MapErrors {
+    walls: Vec<WallError>,
+    /// The laser's mounting pose, for the walls' `G`.
+    mount: Pose2<f64>,
+    /// The pose the map is placed from, as corrected so far.
+    placement: Pose2<f64>,
+    /// `P_bb`: the covariance of the placement's error `b`.
+    placement_covariance: Matrix3<f64>,
+    /// `P_xb = Cov(δx, b)`.
+    state_placement: Matrix3<f64>,
+    /// What [`save`](Self::save) kept, in buffers reused from scan to scan.
+    saved: Saved,
+}
+
+/// A copy of the [`MapErrors`] and the map's walls to go back to.
+#[derive(Debug, Clone, PartialEq)]
+struct Saved {
+    walls: Vec<WallError>,
+    segments: Vec<MapSegment>,
+    placement: Pose2<f64>,
+    placement_covariance: Matrix3<f64>,
+    state_placement: Matrix3<f64>,
+}
+
+impl Default for Saved {
+    fn default() -> Self {
+        Self {
+            walls: Vec::new(),
+            segments: Vec::new(),
+            placement: Pose2::identity(),
+            placement_covariance: Matrix3::zeros(),
+            state_placement: Matrix3::zeros(),
+        }
+    }
+}
+
+impl Default for MapErrors {
+    /// No walls: a given map, whose error is the matching's map noise.
+    fn default() -> Self {
+        Self {
+            walls: Vec::new(),
+            mount: Pose2::identity(),
+            placement: Pose2::identity(),
+            placement_covariance: Matrix3::zeros(),
+            state_placement: Matrix3::zeros(),
+            saved: Saved::default(),
+        }
+    }
+}
+
+impl MapErrors {
+    /// The errors of `map`, whose wall `j` was placed from `lines[sources[j]]` seen by the
+    /// laser at `mount` on a robot at `pose` with covariance `covariance`
+    /// (see [`LineMap::from_scan_with_sources`]).
+    pub(crate) fn of_first_scan(
+        map: &LineMap,
+        lines: &[ObservedLine],
+        sources: &[usize],
+        pose: &Pose2<f64>,
+        covariance: &Matrix3<f64>,
+        mount: &Pose2<f64>,
+    ) -> Self {
+        let walls = map
+            .segments
+            .iter()
+            .zip(sources)
+            .map(|(segment, &source)| {
+                let (f, placement) = placement_jacobians(&segment.line, pose, mount);
+                WallError {
+                    own: f * lines[source].covariance * f.transpose(),
+                    placement,
+                    cross: Matrix3x2::zeros(),
+                    placement_cross: Matrix3x2::zeros(),
+                }
+            })
+            .collect();
+        Self {
+            walls,
+            mount: *mount,
+            placement: *pose,
+            placement_covariance: *covariance,
+            state_placement: *covariance,
+            saved: Saved::default(),
+        }
+    }
+
+    /// Keeps the errors and `map`'s walls for [`restore`](Self::restore) (nothing for a
+    /// map without errors; no allocation once the buffers have grown).
+    pub(crate) fn save(&mut self, map: &LineMap) {
+        if self.walls.is_empty() {
+            return;
+        }
+        let saved = &mut self.saved;
+        saved.walls.clone_from(&self.walls);
+        saved.segments.clone_from(&map.segments);
+        saved.placement = self.placement;
+        saved.placement_covariance = self.placement_covariance;
+        saved.state_placement = self.state_placement;
+    }
+
+    /// Goes back to what [`save`](Self::save) kept.
+    pub(crate) fn restore(&mut self, map: &mut LineMap) {
+        if self.walls.is_empty() {
+            return;
+        }
+        let saved = &self.saved;
+        self.walls.clone_from(&saved.walls);
+        map.segments.clone_from(&saved.segments);
+        self.placement = saved.placement;
+        self.placement_covariance = saved.placement_covariance;
+        self.state_placement = saved.state_placement;
+    }
+
+    /// After a prediction with transition Jacobian `a`: `X ← a X`, `P_xb ← a P_xb`.
+    pub(crate) fn predicted(&mut self, a: &Matrix3<f64>) {
+        self.state_placement = a * self.state_placement;
+        for wall in &mut self.walls {
+            wall.cross = a * wall.cross;
+        }
+    }
+
+    /// After a measurement of the state alone (`h(x)`, innovation `inn`, no wall) was
+    /// fused with `outcome`: the placement takes its share of the innovation and the
+    /// correlations are carried along. Moves `map` by the placement's correction.
+    pub(crate) fn state_measured<const M: usize>(
+        &mut self,
+        inn: &Innovation<f64, M>,
+        outcome: &UpdateOutcome<f64>,
+        map: &mut LineMap,
+    ) {
+        if self.walls.is_empty() || !outcome.accepted {
+            return;
+        }
+        let cov_b_y = self.state_placement.transpose() * inn.h.transpose();
+        let k_b = cov_b_y * inn.s_inverse();
+        // K_x S K_bᵀ = K_x H P_xb, so P_xb ← (I − K_x H) P_xb.
+        self.state_placement = outcome.transition * self.state_placement;
+        for wall in &mut self.walls {
+            wall.placement_cross -= k_b * inn.h * wall.cross;
+            wall.cross = outcome.transition * wall.cross;
+        }
+        self.placement_covariance -= k_b * inn.s * k_b.transpose();
+        self.correct(&(k_b * inn.y), map);
+    }
+
+    /// After a line matched to wall `j` was fused (innovation `inn` with `considered`
+    /// from [`WallErrors::considered`], outcome `update`): as
+    /// [`state_measured`](Self::state_measured), with the wall's own error in the
+    /// correlations.
+    pub(crate) fn line_fused(
+        &mut self,
+        j: usize,
+        inn: &Innovation<f64, 2>,
+        considered: &Considered<f64, 2, 2>,
+        update: &ConsideredUpdate<f64, 2>,
+        map: &mut LineMap,
+    ) {
+        let Some(fused) = self.walls.get(j).copied() else {
+            return;
+        };
+        if !update.outcome.accepted {
+            return;
+        }
+        let h_m = considered.jacobian;
+        let h_b = h_m * fused.placement;
+        // Cov(b, y) = P_bx Hᵀ + (P_bb Gᵀ + Y_j) H_mᵀ.
+        let cov_b_y = self.state_placement.transpose() * inn.h.transpose()
+            + (self.placement_covariance * fused.placement.transpose() + fused.placement_cross)
+                * h_m.transpose();
+        let k_b = cov_b_y * inn.s_inverse();
+        let k_x = update.gain;
+        for (k, wall) in self.walls.iter_mut().enumerate() {
+            // Cov(y, f_k) = H X_k + H_b Y_k + H_m C_j δ_jk; the H X_k part is in the
+            // transition of `cross_after`.
+            let mut h_c_cov = h_b * wall.placement_cross;
+            if k == j {
+                h_c_cov += h_m * fused.own;
+            }
+            let cov_y_f = inn.h * wall.cross + h_c_cov;
+            wall.placement_cross -= k_b * cov_y_f;
+            wall.cross = update.cross_after(&wall.cross, &h_c_cov);
+        }
+        self.state_placement -= k_x * inn.s * k_b.transpose();
+        self.placement_covariance -= k_b * inn.s * k_b.transpose();
+        self.correct(&(k_b * inn.y), map);
+    }
+
+    /// Applies the estimate `δb` of the placement's error (true minus placed, as every
+    /// error here): the map moves rigidly from the pose it was placed from, `x_b`, to
+    /// `x_b + δb`, and the walls' `G` are taken at the new placement.
+    fn correct(&mut self, delta: &Vector3<f64>, map: &mut LineMap) {
+        let old = self.placement;
+        self.placement = Pose2::new(old.x + delta.x, old.y + delta.y, old.theta + delta.z);
+        let motion = self.placement.compose(&old.inverse());
+        for (segment, wall) in map.segments.iter_mut().zip(&mut self.walls) {
+            let (start, end) = (
+                motion.transform_point(&segment.start),
+                motion.transform_point(&segment.end),
+            );
+            if let Ok(line) = Line::from_segment(&start, &end) {
+                (segment.start, segment.end, segment.line) = (start, end, line);
+                wall.placement = placement_jacobians(&line, &self.placement, &self.mount).1;
+            }
+        }
+    }
+}
+
+impl WallErrors for MapErrors {
+    /// Wall `j`'s error `δm_j = G_j b + f_j` as a line matched to it sees it: `H_m` of
+    /// `model`, `Cov(δx, δm_j) = P_xb G_jᵀ + X_j` and
+    /// `Cov(δm_j) = G_j P_bb G_jᵀ + G_j Y_j + Y_jᵀ G_jᵀ + C_j`. `None` for a wall it does
+    /// not know (every wall of a given map).
+    fn considered(
+        &self,
+        j: usize,
+        model: &LaserLine<f64>,
+        pose: &Pose2<f64>,
+    ) -> Option<Considered<f64, 2, 2>> {
+        let wall = self.walls.get(j)?;
+        let g = wall.placement;
+        let g_y = g * wall.placement_cross;
+        Some(Considered {
+            jacobian: model.map_jacobian(pose),
+            cross: self.state_placement * g.transpose() + wall.cross,
+            covariance: g * self.placement_covariance * g.transpose()
+                + g_y
+                + g_y.transpose()
+                + wall.own,
+        })
+    }
+}
+
+/// `F = ∂(ρ, β)/∂(r, ψ)` and `G = ∂(ρ, β)/∂(x, y, θ)` of the wall `line` placed from a
+/// line seen by the laser at `mount` on a robot at `pose`: `F = H_m⁻¹`, `G = −H_m⁻¹ H`.
+fn placement_jacobians(
+    line: &Line<f64>,
+    pose: &Pose2<f64>,
+    mount: &Pose2<f64>,
+) -> (Matrix2<f64>, Matrix2x3<f64>) {
+    // H and H_m depend on the wall and the pose only, not on what was observed.
+    let model = LaserLine {
+        observed: *line,
+        covariance: Matrix2::identity(),
+        map_line: *line,
+        mount: *mount,
+    };
+    let (_, h) = model.predict(pose);
+    // H_m = [[±1, ·], [0, 1]] has determinant ±1: always invertible.
+    let f = inverse_unit_triangular(&model.map_jacobian(pose));
+    (f, -(f * h))
+}
+
+/// The inverse of `[[a, b], [0, 1]]` with `a = ±1`: `[[a, −a b], [0, 1]]`.
+fn inverse_unit_triangular(m: &Matrix2<f64>) -> Matrix2<f64> {
+    let a = m[(0, 0)];
+    Matrix2::new(a, -a * m[(0, 1)], 0.0, 1.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use ekf_core::{angle_diff, Line};
+    use nalgebra::Point2;
+    use proptest::prelude::*;
+
+    const H: f64 = 1e-6;
+
+    /// A line `(r, ψ)` in the sensor frame with end points 1 m either side of its foot.
+    fn observed(r: f64, psi: f64) -> ObservedLine {
+        let line = Line::new(r, psi).unwrap();
+        let foot = Point2::new(r * psi.cos(), r * psi.sin());
+        let along = nalgebra::Vector2::new(-psi.sin(), psi.cos());
+        ObservedLine {
+            line,
+            covariance: Matrix2::new(4e-4, 1e-5, 1e-5, 3e-5),
+            start: foot - along,
+            end: foot + along,
+            num_points: 40,
+        }
+    }
+
+    /// The first-scan wall `(ρ, β)` of `line` seen from `pose` with the laser at `mount`.
+    fn placed(line: &ObservedLine, pose: &Pose2<f64>, mount: &Pose2<f64>) -> (f64, f64) {
+        let map = LineMap::from_scan(core::slice::from_ref(line), &pose.compose(mount)).unwrap();
+        let wall = map.segments[0].line;
+        (wall.rho, wall.beta)
+    }
+
+    fn column(up: (f64, f64), down: (f64, f64)) -> nalgebra::Vector2<f64> {
+        nalgebra::Vector2::new(
+            (up.0 - down.0) / (2.0 * H),
+            angle_diff(up.1, down.1) / (2.0 * H),
+        )
+    }
+
+    proptest! {
+        #[test]
+        fn placement_jacobians_match_finite_differences(
+            x in -5.0..5.0, y in -5.0..5.0, theta in -3.1..3.1,
+            mx in -0.5..0.5, my in -0.2..0.2, mtheta in -3.1..3.1,
+            r in 0.5..8.0, psi in -3.1..3.1,
+        ) {
+            let (pose, mount) = (Pose2::new(x, y, theta), Pose2::new(mx, my, mtheta));
+            let line = observed(r, psi);
+            let (rho, _) = placed(&line, &pose, &mount);
+            // ρ = |…| is not differentiable where the wall passes through the origin.
+            prop_assume!(rho > 1e-3);
+            let map = LineMap::from_scan(core::slice::from_ref(&line), &pose.compose(&mount)).unwrap();
+            let p = Matrix3::from_diagonal_element(1e-4);
+            let errors = MapErrors::of_first_scan(&map, &[line], &[0], &pose, &p, &mount);
+            let wall = errors.walls[0];
+
+            let mut g = Matrix2x3::zeros();
+            for k in 0..3 {
+                let (mut up, mut down) = (pose.to_vector(), pose.to_vector());
+                up[k] += H;
+                down[k] -= H;
+                let at = |v| placed(&line, &Pose2::from_vector(&v), &mount);
+                g.set_column(k, &column(at(up), at(down)));
+            }
+            prop_assert!((wall.placement - g).amax() < 1e-5 * (1.0 + rho), "G {} vs {}", wall.placement, g);
+
+            let mut f = Matrix2::zeros();
+            for (k, (dr, dpsi)) in [(H, 0.0), (0.0, H)].into_iter().enumerate() {
+                let at = |s: f64| placed(&observed(r + s * dr, psi + s * dpsi), &pose, &mount);
+                f.set_column(k, &column(at(1.0), at(-1.0)));
+            }
+            let expected_own = f * line.covariance * f.transpose();
+            prop_assert!((wall.own - expected_own).amax() < 1e-9, "F R Fᵀ {} vs {}", wall.own, expected_own);
+            // At the placement the state's error is the placement's: P_xb = P_bb = P.
+            prop_assert_eq!(errors.state_placement, p);
+            prop_assert_eq!(errors.placement_covariance, p);
+            prop_assert_eq!(wall.cross, Matrix3x2::zeros());
+        }
+    }
+}
