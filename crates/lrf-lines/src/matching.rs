@@ -7,7 +7,9 @@ use crate::ObservedLine;
 use alloc::vec::Vec;
 use core::f64::consts::{PI, TAU};
 use core::fmt;
-use ekf_core::{angle_diff, ChiSquareGate, Considered, Ekf, Error, Innovation, LaserLine, Pose2};
+use ekf_core::{
+    angle_diff, ChiSquareGate, Considered, Ekf, Error, Innovation, LaserLine, Line, Pose2,
+};
 use nalgebra::{Matrix2, Point2};
 use serde::{Deserialize, Serialize};
 
@@ -16,12 +18,13 @@ use serde::{Deserialize, Serialize};
 /// [`ekf_core::Considered`]) is gated with the innovation covariance that includes it, the
 /// same the filter then fuses the line with.
 pub trait WallErrors {
-    /// The error of wall `wall` as a line `model` sees it from `pose`, or `None` if it
-    /// has none.
+    /// The error of wall `wall` (line `line`) as a laser at `mount` on a robot at `pose`
+    /// sees it, or `None` if it has none. It does not depend on the observed line.
     fn considered(
         &self,
         wall: usize,
-        model: &LaserLine<f64>,
+        line: &Line<f64>,
+        mount: &Pose2<f64>,
         pose: &Pose2<f64>,
     ) -> Option<Considered<f64, 2, 2>>;
 }
@@ -30,7 +33,8 @@ impl WallErrors for () {
     fn considered(
         &self,
         _wall: usize,
-        _model: &LaserLine<f64>,
+        _line: &Line<f64>,
+        _mount: &Pose2<f64>,
         _pose: &Pose2<f64>,
     ) -> Option<Considered<f64, 2, 2>> {
         None
@@ -171,10 +175,12 @@ struct WallCache {
     cos: f64,
     sin: f64,
     extent: (f64, f64),
+    /// The wall's considered error at the predicted state, if the map has one.
+    considered: Option<Considered<f64, 2, 2>>,
 }
 
 impl WallCache {
-    fn new(segment: &MapSegment) -> Self {
+    fn new(segment: &MapSegment, considered: Option<Considered<f64, 2, 2>>) -> Self {
         let (sin, cos) = (libm::sin(segment.line.beta), libm::cos(segment.line.beta));
         // Coordinates along the direction d = (−sin β, cos β).
         let along = |p: &Point2<f64>| -p.x * sin + p.y * cos;
@@ -183,6 +189,7 @@ impl WallCache {
             cos,
             sin,
             extent: (t0.min(t1), t0.max(t1)),
+            considered,
         }
     }
 }
@@ -313,13 +320,17 @@ impl Matcher {
         out: &mut MatchResult,
     ) {
         out.clear(observed.len(), map.segments.len());
-        out.walls.extend(map.segments.iter().map(WallCache::new));
+        let pose = ekf.pose();
+        out.walls
+            .extend(map.segments.iter().enumerate().map(|(j, segment)| {
+                WallCache::new(segment, errors.considered(j, &segment.line, mount, &pose))
+            }));
         for (i, line) in observed.iter().enumerate() {
             if let Err(e) = validate_observed(line) {
                 out.status[i] = Status::Unmatched(RejectReason::InvalidLine(e));
                 continue;
             }
-            self.gate_line(i, line, map, errors, ekf, mount, out);
+            self.gate_line(i, line, map, ekf, mount, out);
         }
         out.candidates.sort_unstable_by(|a, b| {
             a.nis
@@ -358,13 +369,11 @@ impl Matcher {
     /// Finds the candidate walls of one valid observed line and records why it has none.
     /// The cheap checks come first (NIS bounds, then overlap); the full innovation only
     /// for walls that pass both.
-    #[allow(clippy::too_many_arguments)]
     fn gate_line(
         &self,
         i: usize,
         line: &ObservedLine,
         map: &LineMap,
-        errors: &impl WallErrors,
         ekf: &Ekf<f64>,
         mount: &Pose2<f64>,
         out: &mut MatchResult,
@@ -378,14 +387,13 @@ impl Matcher {
         );
         let first = out.candidates.len();
         for (j, (segment, wall)) in map.segments.iter().zip(&out.walls).enumerate() {
-            let considered = pair.considered(j, segment, errors);
-            if considered.is_none() && !pair.may_pass(segment, wall) {
+            if wall.considered.is_none() && !pair.may_pass(segment, wall) {
                 continue;
             }
             let Some(overlap) = overlap(wall, &pair.a, &pair.b, &self.params) else {
                 continue;
             };
-            if let Some(innovation) = pair.gated_innovation(segment, considered.as_ref()) {
+            if let Some(innovation) = pair.gated_innovation(segment, wall.considered.as_ref()) {
                 out.candidates.push(Candidate {
                     nis: innovation.nis,
                     observed: i,
@@ -410,11 +418,10 @@ impl Matcher {
             .zip(&out.walls)
             .enumerate()
             .filter_map(|(j, (segment, wall))| {
-                let considered = pair.considered(j, segment, errors);
-                if considered.is_none() && !pair.may_pass(segment, wall) {
+                if wall.considered.is_none() && !pair.may_pass(segment, wall) {
                     return None;
                 }
-                let innovation = pair.gated_innovation(segment, considered.as_ref())?;
+                let innovation = pair.gated_innovation(segment, wall.considered.as_ref())?;
                 Some((j, innovation.nis))
             })
             .min_by(|a, b| a.1.total_cmp(&b.1));
@@ -491,16 +498,6 @@ impl<'a> PairGate<'a> {
             map_line: segment.line,
             mount: *self.mount,
         }
-    }
-
-    /// The considered error of wall `j`, if `errors` has one.
-    fn considered(
-        &self,
-        j: usize,
-        segment: &MapSegment,
-        errors: &impl WallErrors,
-    ) -> Option<Considered<f64, 2, 2>> {
-        errors.considered(j, &self.model(segment), &self.ekf.pose())
     }
 
     /// The pair's innovation (ekf-core's [`LaserLine`] model) if it passes the gate, with

@@ -250,21 +250,22 @@ impl MapErrors {
 }
 
 impl WallErrors for MapErrors {
-    /// Wall `j`'s error `δm_j = G_j b + f_j` as a line matched to it sees it: `H_m` of
-    /// `model`, `Cov(δx, δm_j) = P_xb G_jᵀ + X_j` and
+    /// Wall `j`'s error `δm_j = G_j b + f_j` as a line matched to it sees it: `H_m` at
+    /// `pose`, `Cov(δx, δm_j) = P_xb G_jᵀ + X_j` and
     /// `Cov(δm_j) = G_j P_bb G_jᵀ + G_j Y_j + Y_jᵀ G_jᵀ + C_j`. `None` for a wall it does
     /// not know (every wall of a given map).
     fn considered(
         &self,
         j: usize,
-        model: &LaserLine<f64>,
+        line: &Line<f64>,
+        mount: &Pose2<f64>,
         pose: &Pose2<f64>,
     ) -> Option<Considered<f64, 2, 2>> {
         let wall = self.walls.get(j)?;
         let g = wall.placement;
         let g_y = g * wall.placement_cross;
         Some(Considered {
-            jacobian: model.map_jacobian(pose),
+            jacobian: wall_model(line, mount).map_jacobian(pose),
             cross: self.state_placement * g.transpose() + wall.cross,
             covariance: g * self.placement_covariance * g.transpose()
                 + g_y
@@ -281,17 +282,22 @@ fn placement_jacobians(
     pose: &Pose2<f64>,
     mount: &Pose2<f64>,
 ) -> (Matrix2<f64>, Matrix2x3<f64>) {
-    // H and H_m depend on the wall and the pose only, not on what was observed.
-    let model = LaserLine {
-        observed: *line,
-        covariance: Matrix2::identity(),
-        map_line: *line,
-        mount: *mount,
-    };
+    let model = wall_model(line, mount);
     let (_, h) = model.predict(pose);
     // H_m = [[±1, ·], [0, 1]] has determinant ±1: always invertible.
     let f = inverse_unit_triangular(&model.map_jacobian(pose));
     (f, -(f * h))
+}
+
+/// The line model of the wall `line` for its Jacobians `H` and `H_m`, which depend on the
+/// wall, the mount and the pose only, not on what was observed.
+fn wall_model(line: &Line<f64>, mount: &Pose2<f64>) -> LaserLine<f64> {
+    LaserLine {
+        observed: *line,
+        covariance: Matrix2::identity(),
+        map_line: *line,
+        mount: *mount,
+    }
 }
 
 /// The inverse of `[[a, b], [0, 1]]` with `a = ±1`: `[[a, −a b], [0, 1]]`.

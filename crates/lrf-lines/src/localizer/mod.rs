@@ -397,7 +397,11 @@ impl Localizer {
     ) -> Result<UpdateOutcome<f64>, ekf_core::Error> {
         let gate = Some(self.matcher.gate());
         let pose = self.ekf.pose();
-        let Some(considered) = self.map_errors.considered(wall, model, &pose) else {
+        let mount = &self.config.laser_mount;
+        let considered = self
+            .map_errors
+            .considered(wall, &model.map_line, mount, &pose);
+        let Some(considered) = considered else {
             return self.ekf.update(model, gate);
         };
         let innovation = self.ekf.innovation_considering(model, &considered)?;
