@@ -99,8 +99,9 @@ pub struct UpdateOutcome<T: Real> {
     pub nis: T,
     /// `I − K H`, which maps the state's error before the update onto its error after it
     /// (the identity if the measurement was rejected). A cross-covariance `Cov(δx, δk)`
-    /// of the state with anything the measurement does not depend on becomes
-    /// `(I − K H) Cov(δx, δk)`.
+    /// of the state with anything the measurement's noise and considered parameters are
+    /// independent of becomes `(I − K H) Cov(δx, δk)`; otherwise see
+    /// [`ConsideredUpdate::cross_after`].
     pub transition: Matrix3<T>,
 }
 

@@ -132,9 +132,7 @@ impl<T: Real> LaserLine<T> {
             mount,
         })
     }
-}
 
-impl<T: Real> LaserLine<T> {
     /// The laser's position `(x_s, y_s)` in the world when the robot is at `pose`.
     fn sensor_position(&self, pose: &Pose2<T>) -> (T, T) {
         let (st, ct) = pose.theta.sin_cos();

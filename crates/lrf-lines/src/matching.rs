@@ -14,9 +14,9 @@ use nalgebra::{Matrix2, Point2};
 use serde::{Deserialize, Serialize};
 
 /// What the matcher knows of the error of a map's walls beyond the map noise of
-/// [`MatchParams::line_noise`]: nothing for `()`. A wall with a considered error (see
-/// [`ekf_core::Considered`]) is gated with the innovation covariance that includes it, the
-/// same the filter then fuses the line with.
+/// [`MatchParams::line_noise`]: nothing for `()`. A wall with an error (see
+/// [`ekf_core::Considered`]) is gated with the innovation covariance that includes it, as
+/// the filter fuses the line (there at the state after the lines fused before it).
 pub trait WallErrors {
     /// The error of wall `wall` (line `line`) as a laser at `mount` on a robot at `pose`
     /// sees it, or `None` if it has none. It does not depend on the observed line.
@@ -58,8 +58,8 @@ pub struct MatchParams {
     /// Standard deviation of a matched line's distance beyond its fit covariance (m),
     /// added to the observed line's `R_rr`: a given map's own error (walls placed from
     /// estimated poses), walls that are not perfectly straight or flat, the robot moving
-    /// during the sweep. A first-scan map's walls carry their fit error as a considered
-    /// error on top of this (see [`crate::Localizer::with_first_scan_map`]). Default 0.02 m.
+    /// during the sweep. A first-scan map's walls carry their own error (placement and
+    /// fit) on top of this (see [`crate::Localizer::with_first_scan_map`]). Default 0.02 m.
     pub map_sigma_r: f64,
     /// The same for the line's direction (rad), added to `R_ψψ`. Default 1°.
     pub map_sigma_psi: f64,

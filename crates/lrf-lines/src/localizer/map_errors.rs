@@ -22,7 +22,8 @@
 use crate::{LineMap, MapSegment, ObservedLine, WallErrors};
 use alloc::vec::Vec;
 use ekf_core::{
-    Considered, ConsideredUpdate, Innovation, LaserLine, Line, Measurement, Pose2, UpdateOutcome,
+    angle_diff, Considered, ConsideredUpdate, Error, Innovation, LaserLine, Line, Measurement,
+    Pose2, UpdateOutcome,
 };
 use nalgebra::{Matrix2, Matrix2x3, Matrix3, Matrix3x2, Vector3};
 
@@ -32,11 +33,54 @@ struct WallError {
     /// `C = F R Fᵀ`: the wall's own (fit) error, independent of every other wall's.
     own: Matrix2<f64>,
     /// `G = ∂(ρ, β)/∂(x, y, θ)` of the placement pose.
-    placement: Matrix2x3<f64>,
+    placement_jacobian: Matrix2x3<f64>,
     /// `X = Cov(δx, f)`: the state's error correlated with the wall's fit error.
     cross: Matrix3x2<f64>,
     /// `Y = Cov(b, f)`: the placement's error correlated with the wall's fit error.
     placement_cross: Matrix3x2<f64>,
+}
+
+impl WallError {
+    /// The same error for the wall's line written the other way round, `(−ρ, β + π)`:
+    /// `δρ` changes sign, so `C ← T C T`, `X ← X T`, `Y ← Y T` with `T = diag(−1, 1)`.
+    fn flipped(&self) -> Self {
+        let t = Matrix2::new(-1.0, 0.0, 0.0, 1.0);
+        Self {
+            own: t * self.own * t,
+            cross: self.cross * t,
+            placement_cross: self.placement_cross * t,
+            ..*self
+        }
+    }
+
+    fn is_finite(&self) -> bool {
+        let finite = |m: &[f64]| m.iter().all(|v| v.is_finite());
+        finite(self.own.as_slice())
+            && finite(self.cross.as_slice())
+            && finite(self.placement_cross.as_slice())
+    }
+}
+
+/// The placement: where the map was placed from (as corrected so far) and its error.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Placement {
+    /// The pose the map is placed from.
+    pose: Pose2<f64>,
+    /// `P_bb`: the covariance of the placement's error `b`.
+    covariance: Matrix3<f64>,
+    /// `P_xb = Cov(δx, b)`.
+    state_cross: Matrix3<f64>,
+}
+
+impl Placement {
+    /// Placed from `pose` with covariance `covariance`: the state's error is `b` itself.
+    fn new(pose: Pose2<f64>, covariance: Matrix3<f64>) -> Self {
+        Self {
+            pose,
+            covariance,
+            state_cross: covariance,
+        }
+    }
 }
 
 /// The errors of a first-scan map's walls and their correlation with the state, indexed
@@ -46,12 +90,7 @@ pub(crate) struct MapErrors {
     walls: Vec<WallError>,
     /// The laser's mounting pose, for the walls' `G`.
     mount: Pose2<f64>,
-    /// The pose the map is placed from, as corrected so far.
-    placement: Pose2<f64>,
-    /// `P_bb`: the covariance of the placement's error `b`.
-    placement_covariance: Matrix3<f64>,
-    /// `P_xb = Cov(δx, b)`.
-    state_placement: Matrix3<f64>,
+    placement: Placement,
     /// What [`save`](Self::save) kept, in buffers reused from scan to scan.
     saved: Saved,
 }
@@ -61,33 +100,22 @@ pub(crate) struct MapErrors {
 struct Saved {
     walls: Vec<WallError>,
     segments: Vec<MapSegment>,
-    placement: Pose2<f64>,
-    placement_covariance: Matrix3<f64>,
-    state_placement: Matrix3<f64>,
-}
-
-impl Default for Saved {
-    fn default() -> Self {
-        Self {
-            walls: Vec::new(),
-            segments: Vec::new(),
-            placement: Pose2::identity(),
-            placement_covariance: Matrix3::zeros(),
-            state_placement: Matrix3::zeros(),
-        }
-    }
+    placement: Placement,
 }
 
 impl Default for MapErrors {
     /// No walls: a given map, whose error is the matching's map noise.
     fn default() -> Self {
+        let nothing = Placement::new(Pose2::identity(), Matrix3::zeros());
         Self {
             walls: Vec::new(),
             mount: Pose2::identity(),
-            placement: Pose2::identity(),
-            placement_covariance: Matrix3::zeros(),
-            state_placement: Matrix3::zeros(),
-            saved: Saved::default(),
+            placement: nothing,
+            saved: Saved {
+                walls: Vec::new(),
+                segments: Vec::new(),
+                placement: nothing,
+            },
         }
     }
 }
@@ -109,10 +137,10 @@ impl MapErrors {
             .iter()
             .zip(sources)
             .map(|(segment, &source)| {
-                let (f, placement) = placement_jacobians(&segment.line, pose, mount);
+                let (f, placement_jacobian) = placement_jacobians(&segment.line, pose, mount);
                 WallError {
                     own: f * lines[source].covariance * f.transpose(),
-                    placement,
+                    placement_jacobian,
                     cross: Matrix3x2::zeros(),
                     placement_cross: Matrix3x2::zeros(),
                 }
@@ -121,43 +149,42 @@ impl MapErrors {
         Self {
             walls,
             mount: *mount,
-            placement: *pose,
-            placement_covariance: *covariance,
-            state_placement: *covariance,
-            saved: Saved::default(),
+            placement: Placement::new(*pose, *covariance),
+            ..Self::default()
         }
+    }
+
+    /// `true` for a map without errors (a given map).
+    pub(crate) fn is_empty(&self) -> bool {
+        self.walls.is_empty()
     }
 
     /// Keeps the errors and `map`'s walls for [`restore`](Self::restore) (nothing for a
     /// map without errors; no allocation once the buffers have grown).
     pub(crate) fn save(&mut self, map: &LineMap) {
-        if self.walls.is_empty() {
+        if self.is_empty() {
             return;
         }
         let saved = &mut self.saved;
         saved.walls.clone_from(&self.walls);
         saved.segments.clone_from(&map.segments);
         saved.placement = self.placement;
-        saved.placement_covariance = self.placement_covariance;
-        saved.state_placement = self.state_placement;
     }
 
     /// Goes back to what [`save`](Self::save) kept.
     pub(crate) fn restore(&mut self, map: &mut LineMap) {
-        if self.walls.is_empty() {
+        if self.is_empty() {
             return;
         }
         let saved = &self.saved;
         self.walls.clone_from(&saved.walls);
         map.segments.clone_from(&saved.segments);
         self.placement = saved.placement;
-        self.placement_covariance = saved.placement_covariance;
-        self.state_placement = saved.state_placement;
     }
 
     /// After a prediction with transition Jacobian `a`: `X ← a X`, `P_xb ← a P_xb`.
     pub(crate) fn predicted(&mut self, a: &Matrix3<f64>) {
-        self.state_placement = a * self.state_placement;
+        self.placement.state_cross = a * self.placement.state_cross;
         for wall in &mut self.walls {
             wall.cross = a * wall.cross;
         }
@@ -165,26 +192,28 @@ impl MapErrors {
 
     /// After a measurement of the state alone (`h(x)`, innovation `inn`, no wall) was
     /// fused with `outcome`: the placement takes its share of the innovation and the
-    /// correlations are carried along. Moves `map` by the placement's correction.
+    /// correlations are carried along. Moves `map` by the placement's correction. Fails
+    /// on a non-finite result, leaving things half updated: the caller restores what it
+    /// [saved](Self::save).
     pub(crate) fn state_measured<const M: usize>(
         &mut self,
         inn: &Innovation<f64, M>,
         outcome: &UpdateOutcome<f64>,
         map: &mut LineMap,
-    ) {
-        if self.walls.is_empty() || !outcome.accepted {
-            return;
+    ) -> Result<(), Error> {
+        if self.is_empty() || !outcome.accepted {
+            return Ok(());
         }
-        let cov_b_y = self.state_placement.transpose() * inn.h.transpose();
-        let k_b = cov_b_y * inn.s_inverse();
+        let k_b = self.placement.state_cross.transpose() * inn.h.transpose() * inn.s_inverse();
         // K_x S K_bᵀ = K_x H P_xb, so P_xb ← (I − K_x H) P_xb.
-        self.state_placement = outcome.transition * self.state_placement;
+        self.placement.state_cross = outcome.transition * self.placement.state_cross;
         for wall in &mut self.walls {
             wall.placement_cross -= k_b * inn.h * wall.cross;
             wall.cross = outcome.transition * wall.cross;
         }
-        self.placement_covariance -= k_b * inn.s * k_b.transpose();
-        self.correct(&(k_b * inn.y), map);
+        self.placement.covariance =
+            symmetric(&(self.placement.covariance - k_b * inn.s * k_b.transpose()));
+        self.correct(&(k_b * inn.y), map)
     }
 
     /// After a line matched to wall `j` was fused (innovation `inn` with `considered`
@@ -198,54 +227,74 @@ impl MapErrors {
         considered: &Considered<f64, 2, 2>,
         update: &ConsideredUpdate<f64, 2>,
         map: &mut LineMap,
-    ) {
+    ) -> Result<(), Error> {
         let Some(fused) = self.walls.get(j).copied() else {
-            return;
+            return Ok(());
         };
         if !update.outcome.accepted {
-            return;
+            return Ok(());
         }
         let h_m = considered.jacobian;
-        let h_b = h_m * fused.placement;
+        let g = fused.placement_jacobian;
+        let p = &mut self.placement;
         // Cov(b, y) = P_bx Hᵀ + (P_bb Gᵀ + Y_j) H_mᵀ.
-        let cov_b_y = self.state_placement.transpose() * inn.h.transpose()
-            + (self.placement_covariance * fused.placement.transpose() + fused.placement_cross)
-                * h_m.transpose();
+        let cov_b_y = p.state_cross.transpose() * inn.h.transpose()
+            + (p.covariance * g.transpose() + fused.placement_cross) * h_m.transpose();
         let k_b = cov_b_y * inn.s_inverse();
-        let k_x = update.gain;
         for (k, wall) in self.walls.iter_mut().enumerate() {
-            // Cov(y, f_k) = H X_k + H_b Y_k + H_m C_j δ_jk; the H X_k part is in the
-            // transition of `cross_after`.
-            let mut h_c_cov = h_b * wall.placement_cross;
+            // Cov(y, f_k) = H X_k + H_m Cov(δm_j, f_k), Cov(δm_j, f_k) = G_j Y_k + C_j δ_jk;
+            // the H X_k part is in the transition of `cross_after`.
+            let mut h_m_cov = h_m * g * wall.placement_cross;
             if k == j {
-                h_c_cov += h_m * fused.own;
+                h_m_cov += h_m * fused.own;
             }
-            let cov_y_f = inn.h * wall.cross + h_c_cov;
-            wall.placement_cross -= k_b * cov_y_f;
-            wall.cross = update.cross_after(&wall.cross, &h_c_cov);
+            wall.placement_cross -= k_b * (inn.h * wall.cross + h_m_cov);
+            wall.cross = update.cross_after(&wall.cross, &h_m_cov);
         }
-        self.state_placement -= k_x * inn.s * k_b.transpose();
-        self.placement_covariance -= k_b * inn.s * k_b.transpose();
-        self.correct(&(k_b * inn.y), map);
+        p.state_cross -= update.gain * inn.s * k_b.transpose();
+        p.covariance = symmetric(&(p.covariance - k_b * inn.s * k_b.transpose()));
+        self.correct(&(k_b * inn.y), map)
     }
 
     /// Applies the estimate `δb` of the placement's error (true minus placed, as every
     /// error here): the map moves rigidly from the pose it was placed from, `x_b`, to
-    /// `x_b + δb`, and the walls' `G` are taken at the new placement.
-    fn correct(&mut self, delta: &Vector3<f64>, map: &mut LineMap) {
-        let old = self.placement;
-        self.placement = Pose2::new(old.x + delta.x, old.y + delta.y, old.theta + delta.z);
-        let motion = self.placement.compose(&old.inverse());
+    /// `x_b + δb`, and the walls' `G` are taken at the new placement. A wall whose line
+    /// comes out written the other way round (it passes near the origin) has its error
+    /// flipped with it. Fails, before moving anything, if a result is not finite.
+    fn correct(&mut self, delta: &Vector3<f64>, map: &mut LineMap) -> Result<(), Error> {
+        let finite = |m: &[f64]| m.iter().all(|v| v.is_finite());
+        let p = &self.placement;
+        if !(finite(delta.as_slice())
+            && finite(p.covariance.as_slice())
+            && finite(p.state_cross.as_slice())
+            && self.walls.iter().all(WallError::is_finite))
+        {
+            return Err(Error::NonFinite {
+                what: "first-scan map error",
+            });
+        }
+        let old = p.pose;
+        let new = Pose2::new(old.x + delta.x, old.y + delta.y, old.theta + delta.z);
+        let motion = new.compose(&old.inverse());
+        for segment in &map.segments {
+            let moved = |q| motion.transform_point(q);
+            Line::from_segment(&moved(&segment.start), &moved(&segment.end))?;
+        }
+        self.placement.pose = new;
         for (segment, wall) in map.segments.iter_mut().zip(&mut self.walls) {
             let (start, end) = (
                 motion.transform_point(&segment.start),
                 motion.transform_point(&segment.end),
             );
-            if let Ok(line) = Line::from_segment(&start, &end) {
-                (segment.start, segment.end, segment.line) = (start, end, line);
-                wall.placement = placement_jacobians(&line, &self.placement, &self.mount).1;
+            let line = Line::from_segment(&start, &end)?;
+            let turned = angle_diff(line.beta, segment.line.beta + delta.z);
+            if turned.abs() > core::f64::consts::FRAC_PI_2 {
+                *wall = wall.flipped();
             }
+            wall.placement_jacobian = placement_jacobians(&line, &new, &self.mount).1;
+            (segment.start, segment.end, segment.line) = (start, end, line);
         }
+        Ok(())
     }
 }
 
@@ -262,17 +311,22 @@ impl WallErrors for MapErrors {
         pose: &Pose2<f64>,
     ) -> Option<Considered<f64, 2, 2>> {
         let wall = self.walls.get(j)?;
-        let g = wall.placement;
+        let g = wall.placement_jacobian;
         let g_y = g * wall.placement_cross;
         Some(Considered {
             jacobian: wall_model(line, mount).map_jacobian(pose),
-            cross: self.state_placement * g.transpose() + wall.cross,
-            covariance: g * self.placement_covariance * g.transpose()
+            cross: self.placement.state_cross * g.transpose() + wall.cross,
+            covariance: g * self.placement.covariance * g.transpose()
                 + g_y
                 + g_y.transpose()
                 + wall.own,
         })
     }
+}
+
+/// `(M + Mᵀ)/2`.
+fn symmetric(m: &Matrix3<f64>) -> Matrix3<f64> {
+    (m + m.transpose()) * 0.5
 }
 
 /// `F = ∂(ρ, β)/∂(r, ψ)` and `G = ∂(ρ, β)/∂(x, y, θ)` of the wall `line` placed from a
@@ -343,6 +397,39 @@ mod tests {
         )
     }
 
+    #[test]
+    fn a_wall_moved_across_the_origin_keeps_its_error() {
+        // The wall y = 0.002 (ρ = 0.002, β = π/2), seen from the origin.
+        let (pose, mount) = (Pose2::identity(), Pose2::identity());
+        let line = observed(0.002, core::f64::consts::FRAC_PI_2);
+        let mut map = LineMap::from_scan(&[line], &pose).unwrap();
+        let p = Matrix3::from_diagonal_element(1e-6);
+        let mut errors = MapErrors::of_first_scan(&map, &[line], &[0], &pose, &p, &mount);
+        let before = errors.walls[0];
+        assert!(before.own[(0, 1)].abs() > 0.0);
+        // Moved 4 mm down it is y = −0.002, written (0.002, −π/2): δρ changes sign.
+        errors
+            .correct(&Vector3::new(0.0, -0.004, 0.0), &mut map)
+            .unwrap();
+        let wall = map.segments[0].line;
+        assert!((wall.rho - 0.002).abs() < 1e-9);
+        assert!((wall.beta + core::f64::consts::FRAC_PI_2).abs() < 1e-9);
+        let t = Matrix2::new(-1.0, 0.0, 0.0, 1.0);
+        assert_eq!(errors.walls[0].own, t * before.own * t);
+        // And back: the first form and error again.
+        errors
+            .correct(&Vector3::new(0.0, 0.004, 0.0), &mut map)
+            .unwrap();
+        assert_eq!(errors.walls[0].own, before.own);
+        assert!((map.segments[0].line.beta - core::f64::consts::FRAC_PI_2).abs() < 1e-9);
+        // A correction that is not finite moves nothing.
+        let kept = map.clone();
+        assert!(errors
+            .correct(&Vector3::new(f64::NAN, 0.0, 0.0), &mut map)
+            .is_err());
+        assert_eq!(map, kept);
+    }
+
     proptest! {
         #[test]
         fn placement_jacobians_match_finite_differences(
@@ -368,7 +455,7 @@ mod tests {
                 let at = |v| placed(&line, &Pose2::from_vector(&v), &mount);
                 g.set_column(k, &column(at(up), at(down)));
             }
-            prop_assert!((wall.placement - g).amax() < 1e-5 * (1.0 + rho), "G {} vs {}", wall.placement, g);
+            prop_assert!((wall.placement_jacobian - g).amax() < 1e-5 * (1.0 + rho), "G {} vs {}", wall.placement_jacobian, g);
 
             let mut f = Matrix2::zeros();
             for (k, (dr, dpsi)) in [(H, 0.0), (0.0, H)].into_iter().enumerate() {
@@ -378,8 +465,8 @@ mod tests {
             let expected_own = f * line.covariance * f.transpose();
             prop_assert!((wall.own - expected_own).amax() < 1e-9, "F R Fᵀ {} vs {}", wall.own, expected_own);
             // At the placement the state's error is the placement's: P_xb = P_bb = P.
-            prop_assert_eq!(errors.state_placement, p);
-            prop_assert_eq!(errors.placement_covariance, p);
+            prop_assert_eq!(errors.placement.state_cross, p);
+            prop_assert_eq!(errors.placement.covariance, p);
             prop_assert_eq!(wall.cross, Matrix3x2::zeros());
         }
     }

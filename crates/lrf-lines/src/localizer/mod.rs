@@ -195,13 +195,18 @@ impl Localizer {
     /// at the then current pose ⊕ laser mount ([`LineMap::from_scan`]). Later scans are
     /// matched against it.
     ///
-    /// Each wall of that map is only as good as the line it was fitted to and the pose it
-    /// was placed from, and that error stays the same however often the wall is seen
-    /// again. The filter carries it as a considered (not estimated) parameter of the wall
-    /// (Schmidt–Kalman; see [`ekf_core::Considered`]): with the line's fit covariance and
-    /// the covariance of the pose at the first scan, and its correlation with the state
-    /// through every later step. A given map ([`Localizer::new`]) has no such model; its
-    /// error is the matching's map noise, added to each line's `R`.
+    /// Each wall of that map is only as good as the pose it was placed from and the line
+    /// it was fitted to, and that error stays the same however often the wall is seen
+    /// again. The filter carries both parts:
+    /// - the placement's error (the initial covariance at the first scan), shared by
+    ///   every wall, is estimated with the pose; what is learnt of it moves the map
+    ///   rigidly, so a compass turns the map into its frame and a position fix shifts it;
+    /// - each wall's fit error (from the line's fit covariance) is a considered, not
+    ///   estimated, parameter (Schmidt–Kalman; see [`ekf_core::Considered`]), carried
+    ///   through its correlation with the state and the placement.
+    ///
+    /// A given map ([`Localizer::new`]) has no such model; its error is the matching's
+    /// map noise, added to each line's `R` (which a first-scan map's lines get too).
     pub fn with_first_scan_map(
         config: LocalizerConfig,
         initial_pose: Pose2<f64>,
@@ -250,7 +255,8 @@ impl Localizer {
         variance: f64,
     ) -> Result<UpdateOutcome<f64>, LocalizerError> {
         let compass = Compass::new(heading, variance).map_err(LocalizerError::Filter)?;
-        self.update_state(&compass, Some(&self.compass_gate.clone()))
+        let gate = self.compass_gate;
+        self.update_state(&compass, Some(&gate))
     }
 
     /// Fuses an absolute position `(x, y)` in the map frame (m) with covariance
@@ -275,17 +281,28 @@ impl Localizer {
         measurement: &impl Measurement<f64, M>,
         gate: Option<&ChiSquareGate<f64>>,
     ) -> Result<UpdateOutcome<f64>, LocalizerError> {
+        if self.map_errors.is_empty() {
+            return self
+                .ekf
+                .update(measurement, gate)
+                .map_err(LocalizerError::Filter);
+        }
         let innovation = self
             .ekf
             .innovation(measurement)
             .map_err(LocalizerError::Filter)?;
-        let outcome = self
-            .ekf
-            .update(measurement, gate)
-            .map_err(LocalizerError::Filter)?;
-        self.map_errors
-            .state_measured(&innovation, &outcome, &mut self.map);
-        Ok(outcome)
+        let before = self.ekf;
+        self.map_errors.save(&self.map);
+        let updated = self.ekf.update(measurement, gate).and_then(|outcome| {
+            self.map_errors
+                .state_measured(&innovation, &outcome, &mut self.map)
+                .map(|()| outcome)
+        });
+        if updated.is_err() {
+            self.ekf = before;
+            self.map_errors.restore(&mut self.map);
+        }
+        updated.map_err(LocalizerError::Filter)
     }
 
     /// One laser step: extract, match at the predicted state, fuse sequentially (see the
@@ -407,7 +424,7 @@ impl Localizer {
         let innovation = self.ekf.innovation_considering(model, &considered)?;
         let update = self.ekf.update_considering(model, &considered, gate)?;
         self.map_errors
-            .line_fused(wall, &innovation, &considered, &update, &mut self.map);
+            .line_fused(wall, &innovation, &considered, &update, &mut self.map)?;
         Ok(update.outcome)
     }
 
@@ -456,7 +473,8 @@ impl Localizer {
         &self.ekf
     }
 
-    /// The map (empty until the first scan for [`with_first_scan_map`](Self::with_first_scan_map)).
+    /// The map (empty until the first scan for [`with_first_scan_map`](Self::with_first_scan_map);
+    /// such a map then moves rigidly as the filter learns where it was placed from).
     pub fn map(&self) -> &LineMap {
         &self.map
     }
