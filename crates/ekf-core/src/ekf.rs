@@ -33,15 +33,17 @@ pub struct Considered<T: Real, const M: usize, const N: usize> {
     pub covariance: SMatrix<T, N, N>,
 }
 
-/// What [`Ekf::update_considering`] did: the outcome, and the gain it used, so that the
-/// caller can carry its cross-covariances with other parameters along (see
-/// [`ConsideredUpdate::cross_after`]).
+/// What [`Ekf::update_considering`] did: the outcome, and the innovation and gain it
+/// used, so that the caller can carry its cross-covariances with other parameters along
+/// (see [`ConsideredUpdate::cross_after`]) and give them their share of the innovation.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ConsideredUpdate<T: Real, const M: usize> {
     /// Whether the measurement was fused, its NIS and the error transition `I − K H`.
     pub outcome: UpdateOutcome<T>,
     /// The gain `K = (P Hᵀ + X H_mᵀ) S⁻¹` (zero if the measurement was rejected).
     pub gain: SMatrix<T, 3, M>,
+    /// The innovation at the state before the update (what was fused, if it was).
+    pub innovation: Innovation<T, M>,
 }
 
 impl<T: Real, const M: usize> ConsideredUpdate<T, M> {
@@ -304,7 +306,11 @@ impl<T: Real> Ekf<T> {
         check_gate::<T, M>(gate)?;
         let innovation = self.innovation_considering(m, considered)?;
         let (outcome, gain) = self.fuse_gated(&innovation, gate)?;
-        Ok(ConsideredUpdate { outcome, gain })
+        Ok(ConsideredUpdate {
+            outcome,
+            gain,
+            innovation,
+        })
     }
 
     /// Fuses `inn` if it passes `gate`; returns the outcome and the gain used (zero if

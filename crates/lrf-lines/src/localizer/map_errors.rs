@@ -54,10 +54,9 @@ impl WallError {
     }
 
     fn is_finite(&self) -> bool {
-        let finite = |m: &[f64]| m.iter().all(|v| v.is_finite());
-        finite(self.own.as_slice())
-            && finite(self.cross.as_slice())
-            && finite(self.placement_cross.as_slice())
+        all_finite(self.own.as_slice())
+            && all_finite(self.cross.as_slice())
+            && all_finite(self.placement_cross.as_slice())
     }
 }
 
@@ -216,14 +215,13 @@ impl MapErrors {
         self.correct(&(k_b * inn.y), map)
     }
 
-    /// After a line matched to wall `j` was fused (innovation `inn` with `considered`
-    /// from [`WallErrors::considered`], outcome `update`): as
+    /// After a line matched to wall `j` was fused (with `considered` from
+    /// [`WallErrors::considered`], outcome `update`): as
     /// [`state_measured`](Self::state_measured), with the wall's own error in the
     /// correlations.
     pub(crate) fn line_fused(
         &mut self,
         j: usize,
-        inn: &Innovation<f64, 2>,
         considered: &Considered<f64, 2, 2>,
         update: &ConsideredUpdate<f64, 2>,
         map: &mut LineMap,
@@ -234,7 +232,7 @@ impl MapErrors {
         if !update.outcome.accepted {
             return Ok(());
         }
-        let h_m = considered.jacobian;
+        let (inn, h_m) = (&update.innovation, considered.jacobian);
         let g = fused.placement_jacobian;
         let p = &mut self.placement;
         // Cov(b, y) = P_bx Hᵀ + (P_bb Gᵀ + Y_j) H_mᵀ.
@@ -262,11 +260,10 @@ impl MapErrors {
     /// comes out written the other way round (it passes near the origin) has its error
     /// flipped with it. Fails, before moving anything, if a result is not finite.
     fn correct(&mut self, delta: &Vector3<f64>, map: &mut LineMap) -> Result<(), Error> {
-        let finite = |m: &[f64]| m.iter().all(|v| v.is_finite());
         let p = &self.placement;
-        if !(finite(delta.as_slice())
-            && finite(p.covariance.as_slice())
-            && finite(p.state_cross.as_slice())
+        if !(all_finite(delta.as_slice())
+            && all_finite(p.covariance.as_slice())
+            && all_finite(p.state_cross.as_slice())
             && self.walls.iter().all(WallError::is_finite))
         {
             return Err(Error::NonFinite {
@@ -322,6 +319,11 @@ impl WallErrors for MapErrors {
                 + wall.own,
         })
     }
+}
+
+/// `true` if every value is finite.
+fn all_finite(values: &[f64]) -> bool {
+    values.iter().all(|v| v.is_finite())
 }
 
 /// `(M + Mᵀ)/2`.

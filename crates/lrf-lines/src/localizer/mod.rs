@@ -421,10 +421,9 @@ impl Localizer {
         let Some(considered) = considered else {
             return self.ekf.update(model, gate);
         };
-        let innovation = self.ekf.innovation_considering(model, &considered)?;
         let update = self.ekf.update_considering(model, &considered, gate)?;
         self.map_errors
-            .line_fused(wall, &innovation, &considered, &update, &mut self.map)?;
+            .line_fused(wall, &considered, &update, &mut self.map)?;
         Ok(update.outcome)
     }
 
