@@ -196,6 +196,23 @@ def test_localizer_fuses_a_scan_against_a_map(room_map):
     assert loc.update_compass(POSE[2]).accepted
 
 
+def test_localizer_compass_recovers_from_a_gate_lock_out():
+    # Believed good to 0.5 degrees, 8 degrees off: a 0.1-degree compass fails the gate
+    # until the third consistent reading in a row is fused (compass.recover_after = 3).
+    config = {"compass": {"variance": math.radians(0.1) ** 2}}
+    loc = ekf_loc.Localizer((0.0, 0.0, 0.0), np.diag([1e-4, 1e-4, math.radians(0.5) ** 2]),
+                            config=config)
+    truth, updates = math.radians(8.0), []
+    for _ in range(3):
+        loc.predict_odometry(0.02, 0.02)
+        truth += 0.02
+        updates.append(loc.update_compass(truth))
+    assert [(u.accepted, u.rejected_in_a_row, u.recovered) for u in updates] == [
+        (False, 1, False), (False, 2, False), (True, 3, True)]
+    assert abs(angle_diff(loc.state[2], truth)) < math.radians(0.2)
+    assert "recovered=True" in repr(updates[2])
+
+
 def test_localizer_builds_its_map_from_the_first_scan():
     loc = ekf_loc.Localizer(POSE, np.eye(3) * 1e-4)
     assert len(loc.line_map) == 0

@@ -388,8 +388,11 @@ def test_replay_diagnostics(replayed):
             fused += int(values["lines_fused"])
         else:
             assert status.name == "ekf/compass"
-            assert list(values) == ["nis", "heading_rad"]
-            compass_fused += status.level == 0
+            assert list(values) == ["nis", "heading_rad", "rejected_in_a_row"]
+            fused_here = status.message.startswith("fused")
+            # Through the gate (level 0, none rejected), or ending a lock-out (level 1).
+            assert (status.level == 0) == (fused_here and values["rejected_in_a_row"] == "0")
+            compass_fused += fused_here
     assert names == {"ekf/scan": 440, "ekf/compass": 440}
     assert fused == summary["lines"]["fused"]
     assert compass_fused == summary["compass"]["accepted"]

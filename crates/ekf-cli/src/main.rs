@@ -376,8 +376,8 @@ fn print_replay_table(s: &replay::ReplaySummary) {
         s.lines.extracted, s.lines.matched, s.lines.rejected, s.lines.fused, s.lines.refused
     );
     println!(
-        "  compass: fused {}, rejected {}",
-        s.compass.accepted, s.compass.rejected
+        "  compass: fused {} ({} to end a gate lock-out), rejected {}",
+        s.compass.accepted, s.compass.recovered, s.compass.rejected
     );
     if s.gps.accepted + s.gps.rejected > 0 {
         println!(

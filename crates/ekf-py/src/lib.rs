@@ -42,6 +42,7 @@ fn _ekf_loc(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<map::MapBuilder>()?;
     m.add_class::<matching::Matches>()?;
     m.add_class::<localizer::Localizer>()?;
+    m.add_class::<localizer::CompassUpdate>()?;
     m.add_class::<replay::ReplayResult>()?;
     m.add_class::<simulate::SimulationResult>()?;
     m.add_function(wrap_pyfunction!(lines::extract_lines, m)?)?;

@@ -12,6 +12,47 @@ use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
+/// What `Localizer.update_compass` did with a heading.
+#[pyclass(module = "ekf_loc", frozen, get_all)]
+#[derive(Debug, Clone, Copy)]
+pub struct CompassUpdate {
+    /// True if fused (through the gate, or as the recovery from a gate lock-out).
+    pub accepted: bool,
+    /// NIS of the heading at the predicted state (chi-square, 1 dof).
+    pub nis: f64,
+    /// Consecutive headings up to this one that failed the gate, each agreeing with the
+    /// one before once odometry's turn is taken out; 0 if this one passed.
+    pub rejected_in_a_row: u32,
+    /// True if it failed the gate but was fused because `rejected_in_a_row` reached the
+    /// config's `compass.recover_after`.
+    pub recovered: bool,
+}
+
+#[pymethods]
+impl CompassUpdate {
+    fn __repr__(&self) -> String {
+        let py_bool = |b: bool| if b { "True" } else { "False" };
+        format!(
+            "CompassUpdate(accepted={}, nis={}, rejected_in_a_row={}, recovered={})",
+            py_bool(self.accepted),
+            self.nis,
+            self.rejected_in_a_row,
+            py_bool(self.recovered)
+        )
+    }
+}
+
+impl From<lrf_lines::CompassUpdate> for CompassUpdate {
+    fn from(u: lrf_lines::CompassUpdate) -> Self {
+        Self {
+            accepted: u.outcome.accepted,
+            nis: u.outcome.nis,
+            rejected_in_a_row: u.rejected_in_a_row,
+            recovered: u.recovered,
+        }
+    }
+}
+
 /// One localization step for one robot: the EKF, a line map, line extraction and matching.
 #[pyclass(module = "ekf_loc")]
 pub struct Localizer {
@@ -58,13 +99,10 @@ impl Localizer {
     }
 
     /// Fuses a compass heading (rad, map frame) with the configured variance, or
-    /// `variance` (rad²), if it passes the 1-dof gate.
+    /// `variance` (rad²), if it passes the 1-dof gate, or if it ends a gate lock-out
+    /// (`compass.recover_after` consistent rejections in a row).
     #[pyo3(signature = (heading, variance = None))]
-    fn update_compass(
-        &mut self,
-        heading: f64,
-        variance: Option<f64>,
-    ) -> PyResult<crate::filter::UpdateOutcome> {
+    fn update_compass(&mut self, heading: f64, variance: Option<f64>) -> PyResult<CompassUpdate> {
         let variance = variance.unwrap_or(self.inner.config().compass.variance);
         self.inner
             .update_compass_with_variance(heading, variance)

@@ -19,8 +19,8 @@ pub mod scan;
 
 pub use extract::{ExtractionError, ExtractionParams, LineExtractor};
 pub use localizer::{
-    CompassConfig, LineFusion, Localizer, LocalizerConfig, LocalizerError, ScanReport, ScanStage,
-    StageClock,
+    CompassConfig, CompassUpdate, LineFusion, Localizer, LocalizerConfig, LocalizerError,
+    ScanReport, ScanStage, StageClock,
 };
 pub use map::{LineMap, MapBuilder, MapBuilderParams, MapFormatError, MapSegment};
 pub use matching::{

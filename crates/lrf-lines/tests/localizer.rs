@@ -191,11 +191,12 @@ fn a_compass_outlier_is_gated_out() {
     let outcome = localizer
         .update_compass(pose.theta + 90.0_f64.to_radians())
         .unwrap();
-    assert!(!outcome.accepted && outcome.nis > 6.63);
+    assert!(!outcome.outcome.accepted && outcome.outcome.nis > 10.83);
+    assert_eq!((outcome.rejected_in_a_row, outcome.recovered), (1, false));
     assert_eq!((localizer.pose(), *localizer.covariance()), (pose, p));
     // A consistent heading is fused and shrinks the heading variance.
     let outcome = localizer.update_compass(pose.theta + 0.01).unwrap();
-    assert!(outcome.accepted);
+    assert!(outcome.outcome.accepted && !outcome.recovered);
     assert!(localizer.covariance()[(2, 2)] < p[(2, 2)]);
     assert!(matches!(
         localizer.update_compass(f64::NAN),
@@ -266,11 +267,90 @@ fn bad_config_and_scans_are_named_errors() {
     assert!(localizer.last_lines().is_empty() && localizer.last_matches().matches().is_empty());
 }
 
+/// A localizer whose heading is 8° off while it believes itself good to 0.5°, turning
+/// 0.02 rad per step by odometry (no map, so only the compass can correct it).
+fn drifted(recover_after: u32) -> (Localizer, f64) {
+    let mut config = config();
+    config.compass = CompassConfig {
+        recover_after,
+        ..CompassConfig::paper()
+    };
+    let p = Matrix3::from_diagonal(&Vector3::new(1e-4, 1e-4, 0.5_f64.to_radians().powi(2)));
+    let localizer = Localizer::new(config, start(), p, LineMap::default()).unwrap();
+    (localizer, start().theta - 8.0_f64.to_radians())
+}
+
+#[test]
+fn consistent_rejected_headings_end_a_gate_lock_out() {
+    let turn = Motion::new(0.02, 0.02).unwrap();
+    let (mut localizer, mut truth) = drifted(3);
+    let mut updates = Vec::new();
+    for _ in 0..3 {
+        localizer.predict_odometry(&turn).unwrap();
+        truth += 0.02;
+        updates.push(localizer.update_compass(truth).unwrap());
+    }
+    let in_a_row: Vec<_> = updates.iter().map(|u| u.rejected_in_a_row).collect();
+    assert_eq!(in_a_row, [1, 2, 3]);
+    assert!(updates[..2]
+        .iter()
+        .all(|u| !u.outcome.accepted && !u.recovered));
+    assert!(updates[2].outcome.accepted && updates[2].recovered);
+    // The third was fused as an ordinary update: the 0.1° compass pulls the heading in.
+    assert!(angle_diff(localizer.pose().theta, truth).abs() < 0.2_f64.to_radians());
+    let next = localizer.update_compass(truth).unwrap();
+    assert!(next.outcome.accepted && !next.recovered && next.rejected_in_a_row == 0);
+
+    // With recovery off the lock-out lasts (until odometry's noise has grown the
+    // covariance to the error).
+    let (mut localizer, mut truth) = drifted(0);
+    for _ in 0..5 {
+        localizer.predict_odometry(&turn).unwrap();
+        truth += 0.02;
+        let update = localizer.update_compass(truth).unwrap();
+        assert!(!update.outcome.accepted && !update.recovered);
+    }
+}
+
+#[test]
+fn outliers_in_a_row_do_not_end_a_lock_out() {
+    // Twenty readings in a row, each 30°–180° off the truth in a random direction (the
+    // simulator's disturbed field): none agrees with the one before, none is fused.
+    let (mut localizer, truth) = drifted(3);
+    let mut rng = Rng::new(5);
+    for _ in 0..20 {
+        localizer
+            .predict_odometry(&Motion::new(0.02, 0.0).unwrap())
+            .unwrap();
+        let size = (30.0 + 150.0 * rng.uniform()).to_radians();
+        let sign = if rng.uniform() < 0.5 { -1.0 } else { 1.0 };
+        let update = localizer.update_compass(truth + sign * size).unwrap();
+        assert!(!update.outcome.accepted, "{update:?}");
+        assert_eq!(update.rejected_in_a_row, 1);
+    }
+}
+
+#[test]
+fn recovery_after_a_single_rejection_is_refused() {
+    let mut config = config();
+    config.compass.recover_after = 1;
+    let error =
+        Localizer::new(config, start(), initial_covariance(), LineMap::default()).unwrap_err();
+    assert!(matches!(
+        error,
+        LocalizerError::Config {
+            group: "compass",
+            ..
+        }
+    ));
+    assert!(error.to_string().contains("recover_after"), "{error}");
+}
+
 #[test]
 fn config_files_may_omit_groups_and_fields() {
     let c: LocalizerConfig = serde_json::from_str(r#"{"compass": {"variance": 0.01}}"#).unwrap();
     assert_eq!(c.compass.variance, 0.01);
-    assert_eq!(c.compass.gate_probability, 0.99);
+    assert_eq!(c.compass.gate_probability, 0.999);
     assert_eq!(c.robot, DiffDrive::paper());
     assert_eq!(c.matching, Default::default());
     let d = LocalizerConfig::default();
@@ -367,7 +447,7 @@ fn a_compass_turns_a_first_scan_map_placed_with_a_heading_error_into_its_frame()
         let compass = localizer
             .update_compass_with_variance(truth.theta, 0.1_f64.to_radians().powi(2))
             .unwrap();
-        assert!(compass.accepted);
+        assert!(compass.outcome.accepted);
         localizer
             .update_scan(&scan(&ranges(&truth, &walls(), &mut rng)))
             .unwrap();

@@ -794,19 +794,21 @@ impl<'a> Run<'a> {
         };
         self.catch_up(stamp.to_nanos().filter(|&t| t > 0).unwrap_or(now))?;
         let variance = h.variance.unwrap_or(self.config.localizer.compass.variance);
-        let outcome = self
+        let update = self
             .localizer
             .update_compass_with_variance(h.heading, variance)?;
-        if outcome.accepted {
-            self.summary.compass.accepted += 1;
+        let counts = &mut self.summary.compass;
+        if update.outcome.accepted {
+            counts.accepted += 1;
+            counts.recovered += u64::from(update.recovered);
         } else {
-            self.summary.compass.rejected += 1;
+            counts.rejected += 1;
         }
         if let Some(out) = self.out.as_mut() {
-            let (level, text) = if outcome.accepted {
-                (0, "fused")
-            } else {
-                (1, "rejected by the chi-square gate")
+            let (level, text) = match (update.outcome.accepted, update.recovered) {
+                (true, false) => (0, "fused"),
+                (true, true) => (1, "fused without the gate: consistent rejections in a row"),
+                (false, _) => (1, "rejected by the chi-square gate"),
             };
             out.diagnostics(
                 now,
@@ -814,8 +816,9 @@ impl<'a> Run<'a> {
                 level,
                 text,
                 vec![
-                    ("nis", format!("{:.4}", outcome.nis)),
+                    ("nis", format!("{:.4}", update.outcome.nis)),
                     ("heading_rad", format!("{:.6}", h.heading)),
+                    ("rejected_in_a_row", update.rejected_in_a_row.to_string()),
                 ],
             )?;
         }

@@ -110,6 +110,9 @@ pub struct GatedCounts {
     pub accepted: u64,
     /// Measurements rejected by the chi-square gate.
     pub rejected: u64,
+    /// Of those fused, the ones that failed the gate and were fused to end a gate
+    /// lock-out (compass only; see `CompassConfig::recover_after`).
+    pub recovered: u64,
 }
 
 /// Accuracy against the log's reference (`evo`'s APE without alignment).

@@ -300,10 +300,10 @@ impl InLoop {
             self.localizer.predict_wheels(&w)?;
         }
         if self.mode.uses_compass() {
-            let outcome = self
+            let update = self
                 .localizer
                 .update_compass_with_variance(sample.compass.heading, compass_variance)?;
-            if outcome.accepted {
+            if update.outcome.accepted {
                 stats.compass_fused += 1;
                 stats.compass_outliers_fused += u64::from(sample.compass.outlier);
             }

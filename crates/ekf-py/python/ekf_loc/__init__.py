@@ -14,6 +14,7 @@ message naming the argument; files that cannot be read or written raise ``OSErro
 
 from ._ekf_loc import (
     BatchResult,
+    CompassUpdate,
     Filter,
     LineMap,
     LineUpdates,
@@ -33,6 +34,7 @@ from ._ekf_loc import (
 
 __all__ = [
     "BatchResult",
+    "CompassUpdate",
     "Filter",
     "LineMap",
     "LineUpdates",

@@ -17,6 +17,7 @@ __version__: str
 _debug_build: bool  # True for an unoptimised build (benchmarks refuse it)
 __all__ = [
     "BatchResult",
+    "CompassUpdate",
     "Filter",
     "LineMap",
     "LineUpdates",
@@ -53,6 +54,25 @@ class UpdateOutcome:
     @property
     def nis(self) -> float:
         """Normalised innovation squared y^T S^-1 y (chi-square, dof = measurement size)."""
+
+@final
+class CompassUpdate:
+    """What ``Localizer.update_compass`` did with a heading."""
+
+    @property
+    def accepted(self) -> bool:
+        """True if fused: through the gate, or as the recovery from a gate lock-out."""
+    @property
+    def nis(self) -> float:
+        """Normalised innovation squared at the predicted state (chi-square, 1 dof)."""
+    @property
+    def rejected_in_a_row(self) -> int:
+        """Consecutive headings up to this one that failed the gate, each agreeing with
+        the one before once odometry's turn is taken out; 0 if this one passed."""
+    @property
+    def recovered(self) -> bool:
+        """True if it failed the gate but was fused because ``rejected_in_a_row``
+        reached the config's ``compass.recover_after``."""
 
 @final
 class LineUpdates:
@@ -313,7 +333,7 @@ class Localizer:
     ) -> Localizer: ...
     def predict_wheels(self, left: float, right: float, dt: float) -> None: ...
     def predict_odometry(self, ds: float, dtheta: float) -> None: ...
-    def update_compass(self, heading: float, variance: Optional[float] = None) -> UpdateOutcome: ...
+    def update_compass(self, heading: float, variance: Optional[float] = None) -> CompassUpdate: ...
     def update_scan(
         self,
         ranges: _ArrayLike,

@@ -2,6 +2,7 @@
 //! step — wheel or odometry prediction, compass update, and scan → extract → match →
 //! update — over `ekf-core`, with per-step diagnostics and no printing.
 
+mod compass_lockout;
 mod config;
 mod error;
 mod map_errors;
@@ -9,13 +10,14 @@ mod map_errors;
 pub use config::{CompassConfig, LocalizerConfig};
 pub use error::LocalizerError;
 
+use compass_lockout::CompassLockout;
 use map_errors::MapErrors;
 
 use crate::{LaserScan, LineExtractor, LineMap, MatchResult, Matcher, ObservedLine, WallErrors};
 use alloc::vec::Vec;
 use ekf_core::{
-    ChiSquareGate, Compass, DiffDrive, Ekf, LaserLine, Measurement, Motion, Pose2, Position,
-    UpdateOutcome, WheelNoise, WheelSpeeds,
+    angle_diff, ChiSquareGate, Compass, DiffDrive, Ekf, LaserLine, Measurement, Motion, Pose2,
+    Position, UpdateOutcome, WheelNoise, WheelSpeeds,
 };
 use nalgebra::{Matrix2, Matrix3};
 
@@ -30,6 +32,20 @@ pub struct LineFusion {
     pub nis: f64,
     /// `true` if it passed the gate again and was fused.
     pub accepted: bool,
+}
+
+/// What [`Localizer::update_compass`] did with a heading.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CompassUpdate {
+    /// The update: `accepted` if the heading was fused (through the gate or as the
+    /// recovery from lock-out), its NIS at the predicted state.
+    pub outcome: UpdateOutcome<f64>,
+    /// Consecutive readings up to this one that failed the gate, each agreeing with the
+    /// one before once odometry's turn is taken out; 0 if this one passed the gate.
+    pub rejected_in_a_row: u32,
+    /// `true` if the heading failed the gate but was fused because `rejected_in_a_row`
+    /// reached [`CompassConfig::recover_after`]: the filter, not the compass, was off.
+    pub recovered: bool,
 }
 
 /// Counts for one [`Localizer::update_scan`]; the lines, matches and fusions themselves
@@ -107,7 +123,7 @@ impl StageClock for () {
 ///
 /// localizer.predict_wheels(&WheelSpeeds::new(2.0, 2.0, 0.1)?)?;
 /// let compass = localizer.update_compass(0.01)?;
-/// assert!(compass.accepted);
+/// assert!(compass.outcome.accepted && !compass.recovered);
 ///
 /// // A 181-beam scan (1° steps, −90°…90°) of the wall 3 m ahead, 2.99 m from the laser.
 /// let ranges: Vec<f32> = (0..181)
@@ -141,6 +157,7 @@ pub struct Localizer {
     extractor: LineExtractor,
     matcher: Matcher,
     compass_gate: ChiSquareGate<f64>,
+    compass_lockout: CompassLockout,
     lines: Vec<ObservedLine>,
     matches: MatchResult,
     fusions: Vec<LineFusion>,
@@ -172,6 +189,15 @@ impl Localizer {
         Compass::new(0.0, config.compass.variance).map_err(cfg("compass"))?;
         let compass_gate = ChiSquareGate::from_probability(config.compass.gate_probability, 1)
             .map_err(cfg("compass"))?;
+        if config.compass.recover_after == 1 {
+            return Err(LocalizerError::Config {
+                group: "compass",
+                error: ekf_core::Error::OutOfRange {
+                    what: "recover_after",
+                    expected: "0 (never) or ≥ 2; 1 would fuse every rejected heading",
+                },
+            });
+        }
         let matcher = Matcher::new(config.matching).map_err(cfg("matching"))?;
         let extractor = LineExtractor::new(config.extraction)?;
         let ekf = Ekf::new(initial_pose, initial_covariance).map_err(LocalizerError::Filter)?;
@@ -184,6 +210,7 @@ impl Localizer {
             extractor,
             matcher,
             compass_gate,
+            compass_lockout: CompassLockout::default(),
             lines: Vec::new(),
             matches: MatchResult::new(),
             fusions: Vec::new(),
@@ -221,29 +248,42 @@ impl Localizer {
     /// Prediction from wheel speeds (paper eqs. 1–9) with the configured robot and wheel
     /// noise: `x⁻ = f(x, u)`, `P⁻ = A P Aᵀ + W Q Wᵀ`.
     pub fn predict_wheels(&mut self, speeds: &WheelSpeeds<f64>) -> Result<(), LocalizerError> {
-        let a = self
-            .ekf
-            .predict_wheels(&self.config.robot, speeds, &self.config.wheel_noise)
-            .map_err(LocalizerError::Filter)?;
-        self.map_errors.predicted(&a);
-        Ok(())
+        let (robot, noise) = (self.config.robot, self.config.wheel_noise);
+        self.predict(|ekf| ekf.predict_wheels(&robot, speeds, &noise))
     }
 
     /// Prediction from an odometry delta `(Δs, Δθ)` with the configured odometry noise.
     pub fn predict_odometry(&mut self, motion: &Motion<f64>) -> Result<(), LocalizerError> {
-        let a = self
-            .ekf
-            .predict_odometry(motion, &self.config.odometry_noise)
-            .map_err(LocalizerError::Filter)?;
+        let noise = self.config.odometry_noise;
+        self.predict(|ekf| ekf.predict_odometry(motion, &noise))
+    }
+
+    /// Runs a prediction that returns its transition Jacobian `A`, and tells the map's
+    /// error model and the compass lock-out what it did.
+    fn predict(
+        &mut self,
+        prediction: impl FnOnce(&mut Ekf<f64>) -> Result<Matrix3<f64>, ekf_core::Error>,
+    ) -> Result<(), LocalizerError> {
+        let (heading, p_theta) = (self.ekf.pose().theta, self.ekf.covariance()[(2, 2)]);
+        let a = prediction(&mut self.ekf).map_err(LocalizerError::Filter)?;
         self.map_errors.predicted(&a);
+        self.compass_lockout.predicted(
+            angle_diff(self.ekf.pose().theta, heading),
+            self.ekf.covariance()[(2, 2)] - p_theta,
+        );
         Ok(())
     }
 
     /// Fuses a compass heading `φ` (rad, map frame; see
     /// [`ekf_core::heading_from_compass_bearing`] for raw bearings) with the configured
     /// variance, if its `NIS = wrap(φ − θ)² / (P_θθ + σ²)` passes the 1-dof gate. A
-    /// rejected heading leaves the state unchanged (`accepted == false`).
-    pub fn update_compass(&mut self, heading: f64) -> Result<UpdateOutcome<f64>, LocalizerError> {
+    /// rejected heading leaves the state unchanged (`accepted == false`), unless it ends
+    /// a gate lock-out: the [`recover_after`](CompassConfig::recover_after)-th rejected
+    /// heading in a row, each agreeing with the one before once odometry's turn between
+    /// them is taken out, is fused without the gate (`recovered == true`). The test:
+    /// `wrap(φ_k − φ_{k−1} − Δθ_odo)² / (σ²_{k−1} + σ²_k + Q_θθ) ≤ χ²₁(p)`, with `Q_θθ`
+    /// the heading variance the predictions between the two added.
+    pub fn update_compass(&mut self, heading: f64) -> Result<CompassUpdate, LocalizerError> {
         self.update_compass_with_variance(heading, self.config.compass.variance)
     }
 
@@ -253,10 +293,29 @@ impl Localizer {
         &mut self,
         heading: f64,
         variance: f64,
-    ) -> Result<UpdateOutcome<f64>, LocalizerError> {
+    ) -> Result<CompassUpdate, LocalizerError> {
         let compass = Compass::new(heading, variance).map_err(LocalizerError::Filter)?;
         let gate = self.compass_gate;
-        self.update_state(&compass, Some(&gate))
+        let outcome = self.update_state(&compass, Some(&gate))?;
+        let mut lockout = self.compass_lockout;
+        let mut update = CompassUpdate {
+            outcome,
+            rejected_in_a_row: 0,
+            recovered: false,
+        };
+        if outcome.accepted {
+            lockout.fused();
+        } else {
+            update.rejected_in_a_row = lockout.rejected(heading, variance, &gate);
+            let recover_after = self.config.compass.recover_after;
+            if recover_after > 0 && update.rejected_in_a_row >= recover_after {
+                update.outcome = self.update_state(&compass, None)?;
+                update.recovered = true;
+                lockout.fused();
+            }
+        }
+        self.compass_lockout = lockout;
+        Ok(update)
     }
 
     /// Fuses an absolute position `(x, y)` in the map frame (m) with covariance
