@@ -160,6 +160,17 @@ impl<T: Real> Ekf<T> {
         Ok(self.propagate(motion, motion_covariance))
     }
 
+    /// Adds process noise `Q` (symmetric positive semi-definite) to `P` without moving the
+    /// state: a disturbance the motion model does not describe (a wheel slip, a bump),
+    /// independent of everything else, so cross-covariances with other parameters are
+    /// unchanged (`A = I`). Fails, leaving the filter as it was, if `Q` is not finite,
+    /// not symmetric or not positive semi-definite.
+    pub fn add_process_noise(&mut self, q: &Matrix3<T>) -> Result<(), Error> {
+        semi_definite(q, "process noise")?;
+        self.p = symmetrize(&(self.p + q));
+        Ok(())
+    }
+
     /// Eqs. 5–6 for a motion and a motion covariance already checked (finite, and
     /// positive semi-definite by construction from validated noise parameters); returns
     /// `A`.

@@ -116,3 +116,22 @@ fn predict_compass_two_lines_by_hand() {
         }
     }
 }
+
+#[test]
+fn process_noise_adds_to_the_covariance_and_leaves_the_state() {
+    let p = Matrix3::new(4e-4, 1e-4, 0.0, 1e-4, 3e-4, 2e-5, 0.0, 2e-5, 1e-4);
+    let mut ekf = Ekf::new(Pose2::new(1.0, 2.0, 0.5), p).unwrap();
+    // Scaling P by λ = 3 is adding (λ − 1) P.
+    ekf.add_process_noise(&(p * 2.0)).unwrap();
+    assert_eq!(ekf.pose(), Pose2::new(1.0, 2.0, 0.5));
+    assert!((ekf.covariance() - p * 3.0).abs().max() < 1e-18);
+    // Not positive semi-definite, not symmetric, not finite: refused, P unchanged.
+    let before = *ekf.covariance();
+    let negative = Matrix3::from_diagonal_element(-1e-6);
+    let asymmetric = Matrix3::new(1e-4, 1e-5, 0.0, 0.0, 1e-4, 0.0, 0.0, 0.0, 1e-4);
+    let nan = Matrix3::from_diagonal_element(f64::NAN);
+    for q in [negative, asymmetric, nan] {
+        assert!(ekf.add_process_noise(&q).is_err(), "{q}");
+        assert_eq!(*ekf.covariance(), before);
+    }
+}

@@ -75,7 +75,8 @@ impl LineUpdates {
 /// uses `robot` (wheel_radius, track in m; default 0.05, 0.60), `wheel_noise` (delta,
 /// floor in (rad/s)^2; default 0.01, 1.296e-3), `odometry_noise`, `laser_mount` (x, y,
 /// theta on the robot), `compass` (variance in rad^2, default (2 deg)^2;
-/// gate_probability, default 0.99) and `matching.gate_probability` (line gate, 2 dof).
+/// gate_probability, default 0.999) and `matching.gate_probability` (line gate, 2 dof).
+/// `compass.recover_after` is the Localizer's; the bare filter has no lock-out recovery.
 /// `gating=False` fuses every measurement.
 #[pyclass(module = "ekf_loc")]
 pub struct Filter {

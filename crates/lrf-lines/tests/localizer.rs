@@ -3,11 +3,11 @@
 mod localizer_sim;
 mod matching_support;
 
-use ekf_core::{angle_diff, DiffDrive, Motion, Pose2};
+use ekf_core::{angle_diff, wrap_angle, DiffDrive, Motion, Pose2, WheelSpeeds};
 use localizer_sim::{commands, measured, mount, ranges, scan, start, walls};
 use lrf_lines::{
-    CompassConfig, ExtractionError, ExtractionParams, LineMap, Localizer, LocalizerConfig,
-    LocalizerError,
+    CompassConfig, CompassUpdate, ExtractionError, ExtractionParams, LineMap, Localizer,
+    LocalizerConfig, LocalizerError,
 };
 use matching_support::{map_of, Rng};
 use nalgebra::{Matrix3, Vector3};
@@ -267,56 +267,152 @@ fn bad_config_and_scans_are_named_errors() {
     assert!(localizer.last_lines().is_empty() && localizer.last_matches().matches().is_empty());
 }
 
-/// A localizer whose heading is 8° off while it believes itself good to 0.5°, turning
-/// 0.02 rad per step by odometry (no map, so only the compass can correct it).
-fn drifted(recover_after: u32) -> (Localizer, f64) {
+/// A localizer whose heading is `off` degrees off while it believes itself good to 0.5°,
+/// with the given compass, and no map (so only the compass can correct it).
+fn drifted(compass: CompassConfig, off: f64) -> (Localizer, f64) {
     let mut config = config();
-    config.compass = CompassConfig {
-        recover_after,
-        ..CompassConfig::paper()
-    };
+    config.compass = compass;
     let p = Matrix3::from_diagonal(&Vector3::new(1e-4, 1e-4, 0.5_f64.to_radians().powi(2)));
     let localizer = Localizer::new(config, start(), p, LineMap::default()).unwrap();
-    (localizer, start().theta - 8.0_f64.to_radians())
+    (localizer, start().theta - off.to_radians())
+}
+
+fn paper_compass(recover_after: u32) -> CompassConfig {
+    CompassConfig {
+        recover_after,
+        ..CompassConfig::paper()
+    }
+}
+
+/// Turns 0.02 rad by odometry and reads the compass at the true heading, `n` times.
+fn turn_and_read(localizer: &mut Localizer, truth: &mut f64, n: usize) -> Vec<CompassUpdate> {
+    let turn = Motion::new(0.02, 0.02).unwrap();
+    (0..n)
+        .map(|_| {
+            localizer.predict_odometry(&turn).unwrap();
+            *truth += 0.02;
+            localizer.update_compass(*truth).unwrap()
+        })
+        .collect()
 }
 
 #[test]
 fn consistent_rejected_headings_end_a_gate_lock_out() {
-    let turn = Motion::new(0.02, 0.02).unwrap();
-    let (mut localizer, mut truth) = drifted(3);
-    let mut updates = Vec::new();
-    for _ in 0..3 {
-        localizer.predict_odometry(&turn).unwrap();
-        truth += 0.02;
-        updates.push(localizer.update_compass(truth).unwrap());
-    }
+    let (mut localizer, mut truth) = drifted(paper_compass(3), 8.0);
+    let updates = turn_and_read(&mut localizer, &mut truth, 3);
     let in_a_row: Vec<_> = updates.iter().map(|u| u.rejected_in_a_row).collect();
     assert_eq!(in_a_row, [1, 2, 3]);
     assert!(updates[..2]
         .iter()
         .all(|u| !u.outcome.accepted && !u.recovered));
     assert!(updates[2].outcome.accepted && updates[2].recovered);
-    // The third was fused as an ordinary update: the 0.1° compass pulls the heading in.
+    // After the unmodelled turn's variance is added, the heading's NIS is at most 1.
+    assert!(updates[2].outcome.nis <= 1.0 + 1e-9, "{:?}", updates[2]);
     assert!(angle_diff(localizer.pose().theta, truth).abs() < 0.2_f64.to_radians());
-    let next = localizer.update_compass(truth).unwrap();
+    let next = turn_and_read(&mut localizer, &mut truth, 1)[0];
     assert!(next.outcome.accepted && !next.recovered && next.rejected_in_a_row == 0);
 
     // With recovery off the lock-out lasts (until odometry's noise has grown the
     // covariance to the error).
-    let (mut localizer, mut truth) = drifted(0);
-    for _ in 0..5 {
-        localizer.predict_odometry(&turn).unwrap();
-        truth += 0.02;
-        let update = localizer.update_compass(truth).unwrap();
-        assert!(!update.outcome.accepted && !update.recovered);
+    let (mut localizer, mut truth) = drifted(paper_compass(0), 8.0);
+    let updates = turn_and_read(&mut localizer, &mut truth, 5);
+    assert!(updates.iter().all(|u| !u.outcome.accepted && !u.recovered));
+}
+
+#[test]
+fn a_recovery_trusts_a_coarse_compass_as_much_as_the_lock_out_shows() {
+    // A 2° compass against a filter that believes 0.5° and is 20° off: an ordinary update
+    // would move the heading by P/(P + σ²) ≈ 6 % of the error. The recovery first adds the
+    // unmodelled turn the readings show, and takes nearly all of it. (At 8° off, the
+    // pairs of 2° readings could not tell the filter from a disturbance: their window,
+    // ±9.5°, reaches the filter.)
+    let (mut localizer, mut truth) = drifted(CompassConfig::default(), 20.0);
+    let updates = turn_and_read(&mut localizer, &mut truth, 3);
+    assert!(updates[2].recovered, "{updates:?}");
+    let error = angle_diff(localizer.pose().theta, truth).abs();
+    assert!(error < 1.5_f64.to_radians(), "{}°", error.to_degrees());
+    // The heading's NEES is back to what a consistent filter shows.
+    assert!(error * error / localizer.covariance()[(2, 2)] < 3.0);
+}
+
+#[test]
+fn a_bad_reading_within_a_lock_out_changes_nothing() {
+    let (mut localizer, mut truth) = drifted(paper_compass(2), 8.0);
+    let first = turn_and_read(&mut localizer, &mut truth, 1)[0];
+    assert_eq!(
+        (first.outcome.accepted, first.rejected_in_a_row),
+        (false, 1)
+    );
+    let before = (localizer.pose(), *localizer.covariance());
+    assert!(localizer.update_compass(f64::NAN).is_err());
+    assert_eq!((localizer.pose(), *localizer.covariance()), before);
+    // The run goes on from the first reading: with recover_after = 2 the next ends it.
+    let second = turn_and_read(&mut localizer, &mut truth, 1)[0];
+    assert!(
+        second.recovered && second.rejected_in_a_row == 2,
+        "{second:?}"
+    );
+}
+
+#[test]
+fn a_lock_out_across_plus_minus_pi_ends_with_wheel_predictions() {
+    // Heading near π, turning left through it on the wheels; the compass reads the truth
+    // 6° ahead of the estimate, across the wrap.
+    let mut config = config();
+    config.compass = CompassConfig::paper();
+    let p = Matrix3::from_diagonal(&Vector3::new(1e-4, 1e-4, 0.3_f64.to_radians().powi(2)));
+    let pose = Pose2::new(0.0, 0.0, 179.0_f64.to_radians());
+    let mut localizer = Localizer::new(config, pose, p, LineMap::default()).unwrap();
+    let mut truth = 185.0_f64.to_radians();
+    let speeds = WheelSpeeds::new(2.0, 2.2, 0.1).unwrap();
+    let mut updates = Vec::new();
+    for _ in 0..3 {
+        let before = localizer.pose().theta;
+        localizer.predict_wheels(&speeds).unwrap();
+        truth += angle_diff(localizer.pose().theta, before);
+        updates.push(localizer.update_compass(wrap_angle(truth)).unwrap());
     }
+    assert!(updates[2].recovered, "{updates:?}");
+    let error = angle_diff(localizer.pose().theta, truth);
+    assert!(
+        error.abs() < 0.2_f64.to_radians(),
+        "{}°",
+        error.to_degrees()
+    );
+}
+
+#[test]
+fn a_compass_the_laser_contradicts_stays_rejected() {
+    // A disturbance holds the compass 20° off while the laser sees the room's walls at
+    // the true pose: each fused line says the filter is right, so no run of rejections
+    // builds up, and the steady, self-consistent readings are never fused.
+    let mut config = config();
+    config.compass = CompassConfig::paper();
+    let truth = start();
+    let mut localizer =
+        Localizer::new(config, truth, initial_covariance(), map_of(&walls())).unwrap();
+    let mut rng = Rng::new(3);
+    for _ in 0..10 {
+        let update = localizer
+            .update_compass(truth.theta + 20.0_f64.to_radians())
+            .unwrap();
+        assert!(
+            !update.outcome.accepted && update.rejected_in_a_row == 1,
+            "{update:?}"
+        );
+        let report = localizer
+            .update_scan(&scan(&ranges(&truth, &walls(), &mut rng)))
+            .unwrap();
+        assert!(report.fused > 0);
+    }
+    assert!(angle_diff(localizer.pose().theta, truth.theta).abs() < 0.5_f64.to_radians());
 }
 
 #[test]
 fn outliers_in_a_row_do_not_end_a_lock_out() {
     // Twenty readings in a row, each 30°–180° off the truth in a random direction (the
     // simulator's disturbed field): none agrees with the one before, none is fused.
-    let (mut localizer, truth) = drifted(3);
+    let (mut localizer, truth) = drifted(paper_compass(3), 8.0);
     let mut rng = Rng::new(5);
     for _ in 0..20 {
         localizer

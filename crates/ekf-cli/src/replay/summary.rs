@@ -103,15 +103,24 @@ pub struct LineCounts {
     pub refused: u64,
 }
 
-/// Counts of a gated measurement's updates (compass headings, GPS fixes).
+/// Counts of a gated measurement's updates (GPS fixes).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
 pub struct GatedCounts {
     /// Measurements fused.
     pub accepted: u64,
     /// Measurements rejected by the chi-square gate.
     pub rejected: u64,
+}
+
+/// Counts of the compass headings.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
+pub struct CompassCounts {
+    /// Headings fused.
+    pub accepted: u64,
+    /// Headings rejected by the chi-square gate.
+    pub rejected: u64,
     /// Of those fused, the ones that failed the gate and were fused to end a gate
-    /// lock-out (compass only; see `CompassConfig::recover_after`).
+    /// lock-out (`CompassConfig::recover_after`).
     pub recovered: u64,
 }
 
@@ -165,7 +174,7 @@ pub struct ReplaySummary {
     /// Laser pipeline counts.
     pub lines: LineCounts,
     /// Compass counts.
-    pub compass: GatedCounts,
+    pub compass: CompassCounts,
     /// GPS fix counts (both 0 unless `gps.fuse`).
     pub gps: GatedCounts,
     /// Per-stage timings of the scan updates.

@@ -120,8 +120,9 @@ class Filter:
     ``wheel_noise`` (delta, floor in (rad/s)^2; default 0.01, 1.296e-3), ``odometry_noise``
     (a1, b1, a2, b2, a3, a4, b3), ``laser_mount`` (x, y, theta on the robot; default the
     origin), ``compass`` (variance in rad^2, default (2 deg)^2; gate_probability, default
-    0.99) and ``matching.gate_probability`` (the line gate, default 0.99, 2 dof ->
-    NIS <= 9.21). ``gating=False`` fuses every measurement.
+    0.999) and ``matching.gate_probability`` (the line gate, default 0.99, 2 dof ->
+    NIS <= 9.21); ``compass.recover_after`` is the Localizer's, the bare filter has no
+    lock-out recovery. ``gating=False`` fuses every measurement.
     """
 
     def __new__(

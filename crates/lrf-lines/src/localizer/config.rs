@@ -62,11 +62,14 @@ pub struct CompassConfig {
     /// next heading is as likely to fail. In the paper's simulated room 0.99 left the
     /// heading NEES 9 % high and its RMSE 37 % larger (docs/RESULTS.md).
     pub gate_probability: f64,
-    /// Recovery from gate lock-out: after this many consecutive rejected readings, each
-    /// agreeing with the one before once the odometry's turn between them is taken out,
-    /// the last is fused without the gate (the filter, not the compass, is off). 0: never.
-    /// Default 3 (0.3 s at 10 Hz): two pairs of readings must agree to within a few σ,
-    /// which independent outliers tens of degrees off rarely do. See
+    /// Recovery from gate lock-out: after this many rejected readings in a row, each
+    /// agreeing with the one before (once odometry's turn between them is taken out)
+    /// better than with the filter, and no laser line fused meanwhile, the filter is
+    /// taken to be off: the heading error it missed is added to its covariance (with the
+    /// position error its correlations tie to it) and the last reading fused without the
+    /// gate. 0: never. A number of readings, not a time:
+    /// default 3, 0.3 s at 10 Hz; raise it for a faster source (an AHRS at 100 Hz) or
+    /// one whose disturbances last. See
     /// [`Localizer::update_compass`](super::Localizer::update_compass).
     pub recover_after: u32,
 }

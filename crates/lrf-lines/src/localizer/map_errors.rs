@@ -181,6 +181,20 @@ impl MapErrors {
         self.placement = saved.placement;
     }
 
+    /// After process noise `q v vᵀ` was added to the state, an error of variance `q`
+    /// along `v = Cov(δx, θ) / P_θθ` (`along_pose`; `p_theta` is that `P_θθ`): the
+    /// placement's error moves with it along its own regression on the heading,
+    /// `u = Cov(b, θ) / P_θθ`, so the joint noise is `q (v; u)(v; u)ᵀ`: `P_xb ← P_xb + q v uᵀ`,
+    /// `P_bb ← P_bb + q u uᵀ`. The walls' fit errors are independent of it (`X`, `Y` stay).
+    pub(crate) fn heading_noise_added(&mut self, along_pose: &Vector3<f64>, p_theta: f64, q: f64) {
+        if self.is_empty() {
+            return;
+        }
+        let along_placement = self.placement.state_cross.row(2).transpose() / p_theta;
+        self.placement.state_cross += along_pose * along_placement.transpose() * q;
+        self.placement.covariance += along_placement * along_placement.transpose() * q;
+    }
+
     /// After a prediction with transition Jacobian `a`: `X ← a X`, `P_xb ← a P_xb`.
     pub(crate) fn predicted(&mut self, a: &Matrix3<f64>) {
         self.placement.state_cross = a * self.placement.state_cross;

@@ -10,7 +10,7 @@ mod map_errors;
 pub use config::{CompassConfig, LocalizerConfig};
 pub use error::LocalizerError;
 
-use compass_lockout::CompassLockout;
+use compass_lockout::{CompassLockout, Rejected};
 use map_errors::MapErrors;
 
 use crate::{LaserScan, LineExtractor, LineMap, MatchResult, Matcher, ObservedLine, WallErrors};
@@ -276,13 +276,16 @@ impl Localizer {
 
     /// Fuses a compass heading `φ` (rad, map frame; see
     /// [`ekf_core::heading_from_compass_bearing`] for raw bearings) with the configured
-    /// variance, if its `NIS = wrap(φ − θ)² / (P_θθ + σ²)` passes the 1-dof gate. A
-    /// rejected heading leaves the state unchanged (`accepted == false`), unless it ends
-    /// a gate lock-out: the [`recover_after`](CompassConfig::recover_after)-th rejected
-    /// heading in a row, each agreeing with the one before once odometry's turn between
-    /// them is taken out, is fused without the gate (`recovered == true`). The test:
-    /// `wrap(φ_k − φ_{k−1} − Δθ_odo)² / (σ²_{k−1} + σ²_k + Q_θθ) ≤ χ²₁(p)`, with `Q_θθ`
-    /// the heading variance the predictions between the two added.
+    /// variance, if its `NIS = ν² / S`, `ν = wrap(φ − θ)`, `S = P_θθ + σ²`, passes the 1-dof
+    /// gate. A rejected heading leaves the state unchanged (`accepted == false`), unless
+    /// it ends a gate lock-out: the [`recover_after`](CompassConfig::recover_after)-th
+    /// rejected heading in a row, each agreeing with the one before once odometry's turn
+    /// between them is taken out, with no laser line fused meanwhile (the test is in
+    /// `compass_lockout.rs`). Such a run says the heading is further off than the filter
+    /// allows; the recovery first adds that much heading error, and the position (and
+    /// first-scan map placement) error that goes with it by the filter's correlations,
+    /// so that the heading's NIS is at most 1, then fuses the heading without the gate
+    /// (`recovered == true`).
     pub fn update_compass(&mut self, heading: f64) -> Result<CompassUpdate, LocalizerError> {
         self.update_compass_with_variance(heading, self.config.compass.variance)
     }
@@ -296,6 +299,7 @@ impl Localizer {
     ) -> Result<CompassUpdate, LocalizerError> {
         let compass = Compass::new(heading, variance).map_err(LocalizerError::Filter)?;
         let gate = self.compass_gate;
+        let innovation = angle_diff(heading, self.ekf.pose().theta);
         let outcome = self.update_state(&compass, Some(&gate))?;
         let mut lockout = self.compass_lockout;
         let mut update = CompassUpdate {
@@ -304,18 +308,55 @@ impl Localizer {
             recovered: false,
         };
         if outcome.accepted {
-            lockout.fused();
+            lockout.confirmed();
         } else {
-            update.rejected_in_a_row = lockout.rejected(heading, variance, &gate);
+            let reading = Rejected {
+                heading,
+                variance,
+                innovation,
+            };
+            update.rejected_in_a_row = lockout.rejected(&reading, &gate);
             let recover_after = self.config.compass.recover_after;
             if recover_after > 0 && update.rejected_in_a_row >= recover_after {
-                update.outcome = self.update_state(&compass, None)?;
+                update.outcome = self.recover(&compass, innovation)?;
                 update.recovered = true;
-                lockout.fused();
+                lockout.confirmed();
             }
         }
         self.compass_lockout = lockout;
         Ok(update)
+    }
+
+    /// Ends a compass lock-out with `compass`, whose innovation `ν` the filter expected
+    /// within `S = P_θθ + σ²`. The run of readings shows the heading further off than the
+    /// filter allows, by an error the filter did not model, of variance
+    /// `q = max(0, ν² − S)` (which makes the heading's NIS at most 1). Nothing says how
+    /// the rest of the state moved with it but the filter's own correlations, so the
+    /// error is added along the regression of the estimated errors on the heading's,
+    /// `v = Cov(·, θ) / P_θθ` for the pose and a first-scan map's placement: process noise
+    /// `q v vᵀ`. The position keeps the share of the heading's correction it would have
+    /// had, a map placed from an equally wrong heading turns with the robot, and the rest
+    /// of the covariance is as it was. Then the heading is fused without the gate. On an
+    /// error the state is as before.
+    fn recover(
+        &mut self,
+        compass: &Compass<f64>,
+        innovation: f64,
+    ) -> Result<UpdateOutcome<f64>, LocalizerError> {
+        let p = *self.ekf.covariance();
+        let p_theta = p[(2, 2)];
+        let q = (innovation * innovation - p_theta - compass.variance).max(0.0);
+        let along_pose = p.column(2) / p_theta;
+        self.atomically(|localizer| {
+            localizer
+                .ekf
+                .add_process_noise(&(along_pose * along_pose.transpose() * q))?;
+            localizer
+                .map_errors
+                .heading_noise_added(&along_pose, p_theta, q);
+            localizer.fuse_state(compass, None)
+        })
+        .map_err(LocalizerError::Filter)
     }
 
     /// Fuses an absolute position `(x, y)` in the map frame (m) with covariance
@@ -334,34 +375,48 @@ impl Localizer {
     }
 
     /// Fuses a measurement of the state alone, and lets a first-scan map's placement take
-    /// its share (see [`Localizer::with_first_scan_map`]).
+    /// its share (see [`Localizer::with_first_scan_map`]). On an error the state is as
+    /// before.
     fn update_state<const M: usize>(
         &mut self,
         measurement: &impl Measurement<f64, M>,
         gate: Option<&ChiSquareGate<f64>>,
     ) -> Result<UpdateOutcome<f64>, LocalizerError> {
+        self.atomically(|localizer| localizer.fuse_state(measurement, gate))
+            .map_err(LocalizerError::Filter)
+    }
+
+    /// [`update_state`](Self::update_state) without the way back: on an error the filter
+    /// or the map's errors may be half updated.
+    fn fuse_state<const M: usize>(
+        &mut self,
+        measurement: &impl Measurement<f64, M>,
+        gate: Option<&ChiSquareGate<f64>>,
+    ) -> Result<UpdateOutcome<f64>, ekf_core::Error> {
         if self.map_errors.is_empty() {
-            return self
-                .ekf
-                .update(measurement, gate)
-                .map_err(LocalizerError::Filter);
+            return self.ekf.update(measurement, gate);
         }
-        let innovation = self
-            .ekf
-            .innovation(measurement)
-            .map_err(LocalizerError::Filter)?;
+        let innovation = self.ekf.innovation(measurement)?;
+        let outcome = self.ekf.update(measurement, gate)?;
+        self.map_errors
+            .state_measured(&innovation, &outcome, &mut self.map)?;
+        Ok(outcome)
+    }
+
+    /// Runs `step` on the filter, the map and the map's errors; if it fails, puts them
+    /// back as they were.
+    fn atomically<R>(
+        &mut self,
+        step: impl FnOnce(&mut Self) -> Result<R, ekf_core::Error>,
+    ) -> Result<R, ekf_core::Error> {
         let before = self.ekf;
         self.map_errors.save(&self.map);
-        let updated = self.ekf.update(measurement, gate).and_then(|outcome| {
-            self.map_errors
-                .state_measured(&innovation, &outcome, &mut self.map)
-                .map(|()| outcome)
-        });
-        if updated.is_err() {
+        let result = step(self);
+        if result.is_err() {
             self.ekf = before;
             self.map_errors.restore(&mut self.map);
         }
-        updated.map_err(LocalizerError::Filter)
+        result
     }
 
     /// One laser step: extract, match at the predicted state, fuse sequentially (see the
@@ -418,15 +473,16 @@ impl Localizer {
         clock.stage_done(ScanStage::Matching);
         report.matched = self.matches.matches().len();
         report.rejected = self.matches.rejections().len();
-        let before = self.ekf;
-        self.map_errors.save(&self.map);
-        let fused = self.fuse_matches(&mut report);
+        let fused = self.atomically(|localizer| localizer.fuse_matches(&mut report));
         clock.stage_done(ScanStage::Update);
         if let Err(e) = fused {
-            self.ekf = before;
-            self.map_errors.restore(&mut self.map);
             self.fusions.clear();
             return Err(LocalizerError::Filter(e));
+        }
+        if report.fused > 0 {
+            // The laser agrees with the filter's heading: rejected compass readings are
+            // the compass's trouble, not a lock-out.
+            self.compass_lockout.confirmed();
         }
         Ok(report)
     }
