@@ -161,10 +161,11 @@ impl<T: Real> Ekf<T> {
     }
 
     /// Adds process noise `Q` (symmetric positive semi-definite) to `P` without moving the
-    /// state: a disturbance the motion model does not describe (a wheel slip, a bump),
-    /// independent of everything else, so cross-covariances with other parameters are
-    /// unchanged (`A = I`). Fails, leaving the filter as it was, if `Q` is not finite,
-    /// not symmetric or not positive semi-definite.
+    /// state: a disturbance the motion model does not describe (a wheel slip, a bump).
+    /// Noise independent of everything else leaves cross-covariances with other
+    /// parameters unchanged (`A = I`); a caller whose parameters share the disturbance
+    /// adds its part to them itself. Fails, leaving the filter as it was, if `Q` is not
+    /// finite, not symmetric or not positive semi-definite.
     pub fn add_process_noise(&mut self, q: &Matrix3<T>) -> Result<(), Error> {
         semi_definite(q, "process noise")?;
         self.p = symmetrize(&(self.p + q));

@@ -13,12 +13,12 @@
 //!   readings `φ_{k−1}, φ_k` of the true heading differ by the turn between them, which
 //!   odometry measured with the heading variance `Q_θθ` the predictions added:
 //!
-//!   `d = wrap(φ_k − φ_{k−1} − Δθ_odo)`,  `V = σ²_{k−1} + σ²_k + Q_θθ`,
-//!   `d² ≤ χ²₁(p)·V < ν_k²`
+//!   `d = wrap(φ_k − φ_{k−1} − Δθ_odo)`,  `d² ≤ χ²₁(p)·(σ²_{k−1} + σ²_k + Q_θθ)`,
+//!   `χ²₁(p)·Q_θθ < ν_k²`
 //!
 //!   with `ν_k` the reading's innovation and `p` the compass gate's probability. The
-//!   second inequality asks that the pair's window be narrower than the reading's
-//!   distance from the filter; without it a long gap between two readings (large
+//!   second inequality asks that odometry know the turn between the two better than the
+//!   reading is from the filter; without it a long gap between two readings (large
 //!   `Q_θθ`) would let anything agree. A spike tens of degrees off agrees with a good
 //!   reading, or with another spike, only by chance.
 //! - **No laser line was fused meanwhile.** A fused line means the laser agrees with the
@@ -75,7 +75,8 @@ impl CompassLockout {
         let agrees = self.last_rejected.is_some_and(|(last, last_variance)| {
             let d = angle_diff(reading.heading, wrap_angle(last + self.turned));
             let window = gate.threshold * (last_variance + reading.variance + self.turned_variance);
-            d * d <= window && window < reading.innovation * reading.innovation
+            let turn_window = gate.threshold * self.turned_variance;
+            d * d <= window && turn_window < reading.innovation * reading.innovation
         });
         self.in_a_row = if agrees {
             self.in_a_row.saturating_add(1)
@@ -147,8 +148,8 @@ mod tests {
 
     #[test]
     fn a_pair_whose_window_reaches_the_filter_is_no_evidence() {
-        // A long gap: odometry added (10°)² since the last reading, so the pair's window
-        // (±33°) is wider than this reading's 20° from the filter.
+        // A long gap: odometry added (10°)² since the last reading, so the turn's window
+        // (±25.8° at 0.99) is wider than this reading's 20° from the filter.
         let mut lockout = CompassLockout::default();
         lockout.rejected(&reading(1.0), &gate());
         lockout.predicted(0.0, 10f64.to_radians().powi(2));

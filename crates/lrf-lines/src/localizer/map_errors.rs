@@ -69,6 +69,9 @@ struct Placement {
     covariance: Matrix3<f64>,
     /// `P_xb = Cov(δx, b)`.
     state_cross: Matrix3<f64>,
+    /// `true` once a line has been fused against the map: the robot's heading relative to
+    /// the map has been seen since it was placed.
+    seen_again: bool,
 }
 
 impl Placement {
@@ -78,6 +81,7 @@ impl Placement {
             pose,
             covariance,
             state_cross: covariance,
+            seen_again: false,
         }
     }
 }
@@ -182,12 +186,16 @@ impl MapErrors {
     }
 
     /// After process noise `q v vᵀ` was added to the state, an error of variance `q`
-    /// along `v = Cov(δx, θ) / P_θθ` (`along_pose`; `p_theta` is that `P_θθ`): the
-    /// placement's error moves with it along its own regression on the heading,
-    /// `u = Cov(b, θ) / P_θθ`, so the joint noise is `q (v; u)(v; u)ᵀ`: `P_xb ← P_xb + q v uᵀ`,
-    /// `P_bb ← P_bb + q u uᵀ`. The walls' fit errors are independent of it (`X`, `Y` stay).
+    /// along `v = Cov(δx, θ) / P_θθ` (`along_pose`; `p_theta` is that `P_θθ`), which the
+    /// placement may share: until a line has been fused against the map, nothing has
+    /// told the robot's heading from the map's since the map was placed from it (the
+    /// start's heading itself may be the error), so the placement's error moves with the
+    /// state's along its own regression on the heading, `u = Cov(b, θ) / P_θθ`, and the
+    /// joint noise is `q (v; u)(v; u)ᵀ`: `P_xb ← P_xb + q v uᵀ`, `P_bb ← P_bb + q u uᵀ`.
+    /// Once a line has been fused, the error is the robot's alone and the placement is
+    /// left as it is. The walls' fit errors are independent of it (`X`, `Y` stay).
     pub(crate) fn heading_noise_added(&mut self, along_pose: &Vector3<f64>, p_theta: f64, q: f64) {
-        if self.is_empty() {
+        if self.is_empty() || self.placement.seen_again {
             return;
         }
         let along_placement = self.placement.state_cross.row(2).transpose() / p_theta;
@@ -246,6 +254,7 @@ impl MapErrors {
         if !update.outcome.accepted {
             return Ok(());
         }
+        self.placement.seen_again = true;
         let (inn, h_m) = (&update.innovation, considered.jacobian);
         let g = fused.placement_jacobian;
         let p = &mut self.placement;
@@ -411,6 +420,42 @@ mod tests {
             (up.0 - down.0) / (2.0 * H),
             angle_diff(up.1, down.1) / (2.0 * H),
         )
+    }
+
+    #[test]
+    fn heading_noise_moves_an_unseen_placement_with_the_state_only() {
+        let (pose, mount) = (Pose2::new(1.0, 2.0, 0.3), Pose2::identity());
+        let line = observed(2.0, 0.4);
+        let map = LineMap::from_scan(&[line], &pose).unwrap();
+        let p = Matrix3::new(4e-4, 1e-5, 2e-5, 1e-5, 3e-4, -1e-5, 2e-5, -1e-5, 1e-4);
+        let mut errors = MapErrors::of_first_scan(&map, &[line], &[0], &pose, &p, &mount);
+        // Just placed: b's error is the state's, so its regression on θ is v itself and
+        // the joint noise q (v; v)(v; v)ᵀ adds q v vᵀ to P_xb and to P_bb alike.
+        let v = p.column(2) / p[(2, 2)];
+        let q = 5e-4;
+        errors.heading_noise_added(&v, p[(2, 2)], q);
+        let added = v * v.transpose() * q;
+        assert!((errors.placement.state_cross - (p + added)).amax() < 1e-18);
+        assert!((errors.placement.covariance - (p + added)).amax() < 1e-18);
+        // The joint covariance of (x, b) with the state's noise added is still PSD.
+        let mut joint = nalgebra::Matrix6::zeros();
+        joint.fixed_view_mut::<3, 3>(0, 0).copy_from(&(p + added));
+        joint
+            .fixed_view_mut::<3, 3>(0, 3)
+            .copy_from(&errors.placement.state_cross);
+        joint
+            .fixed_view_mut::<3, 3>(3, 0)
+            .copy_from(&errors.placement.state_cross.transpose());
+        joint
+            .fixed_view_mut::<3, 3>(3, 3)
+            .copy_from(&errors.placement.covariance);
+        let smallest = joint.symmetric_eigenvalues().min();
+        assert!(smallest > -1e-15, "{smallest}");
+        // Once a line has been fused against the map, the placement stays as it is.
+        errors.placement.seen_again = true;
+        let seen = errors.placement;
+        errors.heading_noise_added(&v, p[(2, 2)], q);
+        assert_eq!(errors.placement, seen);
     }
 
     #[test]

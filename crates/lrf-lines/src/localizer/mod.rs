@@ -38,10 +38,12 @@ pub struct LineFusion {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CompassUpdate {
     /// The update: `accepted` if the heading was fused (through the gate or as the
-    /// recovery from lock-out), its NIS at the predicted state.
+    /// recovery from lock-out), its NIS at the predicted state (for a recovery, before
+    /// the missed error was added).
     pub outcome: UpdateOutcome<f64>,
     /// Consecutive readings up to this one that failed the gate, each agreeing with the
-    /// one before once odometry's turn is taken out; 0 if this one passed the gate.
+    /// one before (once odometry's turn is taken out) better than with the filter, with
+    /// no laser line fused meanwhile; 0 if this one passed the gate.
     pub rejected_in_a_row: u32,
     /// `true` if the heading failed the gate but was fused because `rejected_in_a_row`
     /// reached [`CompassConfig::recover_after`]: the filter, not the compass, was off.
@@ -333,11 +335,12 @@ impl Localizer {
     /// `q = max(0, ν² − S)` (which makes the heading's NIS at most 1). Nothing says how
     /// the rest of the state moved with it but the filter's own correlations, so the
     /// error is added along the regression of the estimated errors on the heading's,
-    /// `v = Cov(·, θ) / P_θθ` for the pose and a first-scan map's placement: process noise
-    /// `q v vᵀ`. The position keeps the share of the heading's correction it would have
-    /// had, a map placed from an equally wrong heading turns with the robot, and the rest
-    /// of the covariance is as it was. Then the heading is fused without the gate. On an
-    /// error the state is as before.
+    /// `v = Cov(δx, θ) / P_θθ`: process noise `q v vᵀ`. The position keeps the share of
+    /// the heading's correction it would have had, and the rest of the covariance is as
+    /// it was. A first-scan map against which no line has been fused yet turns with the
+    /// robot (its heading may be the error; see `MapErrors::heading_noise_added`). Then
+    /// the heading is fused without the gate; the outcome keeps the NIS the heading had
+    /// at the predicted state. On an error the state is as before.
     fn recover(
         &mut self,
         compass: &Compass<f64>,
@@ -347,6 +350,7 @@ impl Localizer {
         let p_theta = p[(2, 2)];
         let q = (innovation * innovation - p_theta - compass.variance).max(0.0);
         let along_pose = p.column(2) / p_theta;
+        let nis = innovation * innovation / (p_theta + compass.variance);
         self.atomically(|localizer| {
             localizer
                 .ekf
@@ -354,7 +358,8 @@ impl Localizer {
             localizer
                 .map_errors
                 .heading_noise_added(&along_pose, p_theta, q);
-            localizer.fuse_state(compass, None)
+            let fused = localizer.fuse_state(compass, None)?;
+            Ok(UpdateOutcome { nis, ..fused })
         })
         .map_err(LocalizerError::Filter)
     }
@@ -404,7 +409,7 @@ impl Localizer {
     }
 
     /// Runs `step` on the filter, the map and the map's errors; if it fails, puts them
-    /// back as they were.
+    /// back as they were. Not to be nested: the map's errors keep one saved copy.
     fn atomically<R>(
         &mut self,
         step: impl FnOnce(&mut Self) -> Result<R, ekf_core::Error>,
