@@ -50,15 +50,18 @@ pub(crate) fn positive<T: Real>(v: T, what: &'static str) -> Result<T, Error> {
 
 /// Checks that `m` is a valid process-noise covariance: finite, symmetric and positive
 /// *semi*-definite (a motion covariance may be singular, e.g. no lateral noise). Tested as
-/// positive definiteness of `m + ε·(1 + max|m_ij|)·I` with `ε = √machine-epsilon`, which
-/// passes any PSD matrix and fails one with an eigenvalue below `−ε·scale`.
+/// positive definiteness of `m + (ε·max|m_ij| + ε_m²)·I` with `ε_m` the machine epsilon
+/// and `ε = √ε_m`, which passes any PSD matrix (rounding leaves its eigenvalues at most
+/// about `−ε_m·scale`) and fails one with an eigenvalue below `−ε·scale`, however small
+/// its scale; `ε_m²` keeps the zero matrix valid.
 pub(crate) fn semi_definite<T: Real, const N: usize>(
     m: &SMatrix<T, N, N>,
     what: &'static str,
 ) -> Result<(), Error> {
     all_finite(m.as_slice(), what)?;
     let scale = m.amax();
-    let tol = T::default_epsilon().sqrt() * (T::one() + scale);
+    let eps = T::default_epsilon();
+    let tol = eps.sqrt() * (T::one() + scale);
     for i in 0..N {
         for j in (i + 1)..N {
             if (m[(i, j)] - m[(j, i)]).abs() > tol * scale {
@@ -69,7 +72,7 @@ pub(crate) fn semi_definite<T: Real, const N: usize>(
             return Err(Error::NegativeVariance { what });
         }
     }
-    let jittered = m + SMatrix::<T, N, N>::identity() * tol;
+    let jittered = m + SMatrix::<T, N, N>::identity() * (eps.sqrt() * scale + eps * eps);
     if Cholesky::new(jittered).is_none() {
         return Err(Error::NotPositiveDefinite { what });
     }

@@ -130,8 +130,15 @@ fn process_noise_adds_to_the_covariance_and_leaves_the_state() {
     let negative = Matrix3::from_diagonal_element(-1e-6);
     let asymmetric = Matrix3::new(1e-4, 1e-5, 0.0, 0.0, 1e-4, 0.0, 0.0, 0.0, 1e-4);
     let nan = Matrix3::from_diagonal_element(f64::NAN);
-    for q in [negative, asymmetric, nan] {
+    // Small but indefinite: eigenvalues 2.01e-6, −1e-8 and 0.
+    let small_indefinite = Matrix3::new(1e-6, 1.01e-6, 0.0, 1.01e-6, 1e-6, 0.0, 0.0, 0.0, 0.0);
+    for q in [negative, asymmetric, nan, small_indefinite] {
         assert!(ekf.add_process_noise(&q).is_err(), "{q}");
         assert_eq!(*ekf.covariance(), before);
+    }
+    // Singular but PSD, however small: the zero matrix, and q v vᵀ at q = 1e-12.
+    let v = nalgebra::Vector3::new(0.3, -1.7, 1.0);
+    for q in [Matrix3::zeros(), v * v.transpose() * 1e-12] {
+        assert!(ekf.add_process_noise(&q).is_ok(), "{q}");
     }
 }
