@@ -55,8 +55,8 @@ pub(super) struct Rejected {
     pub(super) heading: f64,
     /// Its variance `σ²` (rad²).
     pub(super) variance: f64,
-    /// Its innovation `ν = wrap(φ − θ⁻)` (rad).
-    pub(super) innovation: f64,
+    /// Its squared innovation `ν² = wrap(φ − θ⁻)²` (rad²).
+    pub(super) innovation_squared: f64,
 }
 
 impl CompassLockout {
@@ -76,7 +76,7 @@ impl CompassLockout {
             let d = angle_diff(reading.heading, wrap_angle(last + self.turned));
             let window = gate.threshold * (last_variance + reading.variance + self.turned_variance);
             let turn_window = gate.threshold * self.turned_variance;
-            d * d <= window && turn_window < reading.innovation * reading.innovation
+            d * d <= window && turn_window < reading.innovation_squared
         });
         self.in_a_row = if agrees {
             self.in_a_row.saturating_add(1)
@@ -115,7 +115,7 @@ mod tests {
         Rejected {
             heading,
             variance: SIGMA2,
-            innovation: FAR,
+            innovation_squared: FAR * FAR,
         }
     }
 
@@ -154,7 +154,7 @@ mod tests {
         lockout.rejected(&reading(1.0), &gate());
         lockout.predicted(0.0, 10f64.to_radians().powi(2));
         let far_from_filter = Rejected {
-            innovation: 20f64.to_radians(),
+            innovation_squared: 20f64.to_radians().powi(2),
             ..reading(1.0)
         };
         assert_eq!(lockout.rejected(&far_from_filter, &gate()), 1);

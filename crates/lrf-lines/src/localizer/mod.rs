@@ -301,7 +301,7 @@ impl Localizer {
     ) -> Result<CompassUpdate, LocalizerError> {
         let compass = Compass::new(heading, variance).map_err(LocalizerError::Filter)?;
         let gate = self.compass_gate;
-        let innovation = angle_diff(heading, self.ekf.pose().theta);
+        let s = self.ekf.covariance()[(2, 2)] + variance;
         let outcome = self.update_state(&compass, Some(&gate))?;
         let mut lockout = self.compass_lockout;
         let mut update = CompassUpdate {
@@ -312,15 +312,21 @@ impl Localizer {
         if outcome.accepted {
             lockout.confirmed();
         } else {
+            // Rejected, so the state is as it was: `ν² = NIS · S`.
             let reading = Rejected {
                 heading,
                 variance,
-                innovation,
+                innovation_squared: outcome.nis * s,
             };
             update.rejected_in_a_row = lockout.rejected(&reading, &gate);
             let recover_after = self.config.compass.recover_after;
             if recover_after > 0 && update.rejected_in_a_row >= recover_after {
-                update.outcome = self.recover(&compass, innovation)?;
+                let fused = self.recover(&compass, reading.innovation_squared)?;
+                // The NIS the heading had at the predicted state, past the gate.
+                update.outcome = UpdateOutcome {
+                    nis: outcome.nis,
+                    ..fused
+                };
                 update.recovered = true;
                 lockout.confirmed();
             }
@@ -329,7 +335,8 @@ impl Localizer {
         Ok(update)
     }
 
-    /// Ends a compass lock-out with `compass`, whose innovation `ν` the filter expected
+    /// Ends a compass lock-out with `compass`, whose innovation `ν` (given as `ν²`) the
+    /// filter expected
     /// within `S = P_θθ + σ²`. The run of readings shows the heading further off than the
     /// filter allows, by an error the filter did not model, of variance
     /// `q = max(0, ν² − S)` (which makes the heading's NIS at most 1). Nothing says how
@@ -339,18 +346,16 @@ impl Localizer {
     /// the heading's correction it would have had, and the rest of the covariance is as
     /// it was. A first-scan map against which no line has been fused yet turns with the
     /// robot (its heading may be the error; see `MapErrors::heading_noise_added`). Then
-    /// the heading is fused without the gate; the outcome keeps the NIS the heading had
-    /// at the predicted state. On an error the state is as before.
+    /// the heading is fused without the gate. On an error the state is as before.
     fn recover(
         &mut self,
         compass: &Compass<f64>,
-        innovation: f64,
+        innovation_squared: f64,
     ) -> Result<UpdateOutcome<f64>, LocalizerError> {
         let p = *self.ekf.covariance();
         let p_theta = p[(2, 2)];
-        let q = (innovation * innovation - p_theta - compass.variance).max(0.0);
+        let q = (innovation_squared - p_theta - compass.variance).max(0.0);
         let along_pose = p.column(2) / p_theta;
-        let nis = innovation * innovation / (p_theta + compass.variance);
         self.atomically(|localizer| {
             localizer
                 .ekf
@@ -358,8 +363,7 @@ impl Localizer {
             localizer
                 .map_errors
                 .heading_noise_added(&along_pose, p_theta, q);
-            let fused = localizer.fuse_state(compass, None)?;
-            Ok(UpdateOutcome { nis, ..fused })
+            localizer.fuse_state(compass, None)
         })
         .map_err(LocalizerError::Filter)
     }
