@@ -33,6 +33,18 @@ pub struct Considered<T: Real, const M: usize, const N: usize> {
     pub covariance: SMatrix<T, N, N>,
 }
 
+impl<T: Real, const M: usize> Considered<T, M, 0> {
+    /// No considered parameters: [`Ekf::update_considering`] with these is
+    /// [`Ekf::update`], and also hands back the innovation and gain it used.
+    pub fn none() -> Self {
+        Self {
+            jacobian: SMatrix::zeros(),
+            cross: SMatrix::zeros(),
+            covariance: SMatrix::zeros(),
+        }
+    }
+}
+
 /// What [`Ekf::update_considering`] did: the outcome, and the innovation and gain it
 /// used, so that the caller can carry its cross-covariances with other parameters along
 /// (see [`ConsideredUpdate::cross_after`]) and give them their share of the innovation.

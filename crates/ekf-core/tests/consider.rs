@@ -118,6 +118,35 @@ fn with_nothing_considered_it_is_the_plain_update_bit_for_bit() {
 }
 
 #[test]
+fn considering_none_is_the_plain_update_and_hands_back_its_innovation() {
+    let pose = Pose2::new(1.0, -0.5, 0.3);
+    let p = Matrix3::new(4e-3, 1e-4, 2e-4, 1e-4, 3e-3, -1e-4, 2e-4, -1e-4, 1e-3);
+    let gate = ChiSquareGate::from_probability(0.99, 2).unwrap();
+    for (m, accepted) in [
+        (
+            Position::new(1.03, -0.52, Matrix2::new(1e-3, 2e-4, 2e-4, 2e-3)).unwrap(),
+            true,
+        ),
+        // Far outside the gate: rejected by both, nothing changed.
+        (
+            Position::new(3.0, 2.0, Matrix2::identity() * 1e-4).unwrap(),
+            false,
+        ),
+    ] {
+        let (mut plain, mut none) = (Ekf::new(pose, p).unwrap(), Ekf::new(pose, p).unwrap());
+        let innovation = plain.innovation(&m).unwrap();
+        let a = plain.update(&m, Some(&gate)).unwrap();
+        let b = none
+            .update_considering(&m, &Considered::none(), Some(&gate))
+            .unwrap();
+        assert_eq!(a.accepted, accepted);
+        assert_eq!(a, b.outcome);
+        assert_eq!(plain, none);
+        assert_eq!(innovation, b.innovation);
+    }
+}
+
+#[test]
 fn a_rejected_measurement_changes_nothing_and_its_transition_is_the_identity() {
     let pose = Pose2::new(0.0, 0.0, 0.0);
     let mut ekf = Ekf::new(pose, Matrix3::identity() * 1e-4).unwrap();

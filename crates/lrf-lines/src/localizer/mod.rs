@@ -16,8 +16,8 @@ use map_errors::MapErrors;
 use crate::{LaserScan, LineExtractor, LineMap, MatchResult, Matcher, ObservedLine, WallErrors};
 use alloc::vec::Vec;
 use ekf_core::{
-    angle_diff, ChiSquareGate, Compass, DiffDrive, Ekf, LaserLine, Measurement, Motion, Pose2,
-    Position, UpdateOutcome, WheelNoise, WheelSpeeds,
+    angle_diff, ChiSquareGate, Compass, Considered, DiffDrive, Ekf, LaserLine, Measurement, Motion,
+    Pose2, Position, UpdateOutcome, WheelNoise, WheelSpeeds,
 };
 use nalgebra::{Matrix2, Matrix3};
 
@@ -405,11 +405,12 @@ impl Localizer {
         if self.map_errors.is_empty() {
             return self.ekf.update(measurement, gate);
         }
-        let innovation = self.ekf.innovation(measurement)?;
-        let outcome = self.ekf.update(measurement, gate)?;
+        let update = self
+            .ekf
+            .update_considering(measurement, &Considered::none(), gate)?;
         self.map_errors
-            .state_measured(&innovation, &outcome, &mut self.map)?;
-        Ok(outcome)
+            .state_measured(&update.innovation, &update.outcome, &mut self.map)?;
+        Ok(update.outcome)
     }
 
     /// Runs `step` on the filter, the map and the map's errors; if it fails, puts them
