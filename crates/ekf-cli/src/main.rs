@@ -433,24 +433,27 @@ fn print_live_event(event: &live::LiveEvent, json: bool) {
     match event {
         live::LiveEvent::Pose {
             t_ns,
+            fused_ns,
             pose,
             covariance,
         } => {
             if json {
                 let line = serde_json::json!({
-                    "t_ns": t_ns, "x": pose.x, "y": pose.y, "theta": pose.theta,
+                    "t_ns": t_ns, "fused_ns": fused_ns,
+                    "x": pose.x, "y": pose.y, "theta": pose.theta,
                     "sigma_xy": [covariance[(0, 0)].sqrt(), covariance[(1, 1)].sqrt()],
                     "sigma_theta": covariance[(2, 2)].sqrt(),
                 });
                 println!("{line}");
             } else {
                 println!(
-                    "{:.3}  x {:8.3} m  y {:8.3} m  θ {:7.2}°  σxy {:.3} m",
+                    "{:.3}  x {:8.3} m  y {:8.3} m  θ {:7.2}°  σxy {:.3} m  (odometry since {:.2} s)",
                     *t_ns as f64 * 1e-9,
                     pose.x,
                     pose.y,
                     pose.theta.to_degrees(),
-                    (covariance[(0, 0)] + covariance[(1, 1)]).sqrt()
+                    (covariance[(0, 0)] + covariance[(1, 1)]).sqrt(),
+                    t_ns.saturating_sub(*fused_ns) as f64 * 1e-9
                 );
             }
         }

@@ -199,4 +199,40 @@ fn live_against_the_emulated_robot_replays_bit_for_bit_and_tracks_the_truth() {
     assert!(head_rmse <= 0.3, "heading RMSE {head_rmse}°");
     assert!(report.ape.matched_poses > 600, "{:?}", report.ape);
     assert!(report.ape.translation_m.rmse <= 0.02, "{:?}", report.ape);
+
+    // The poses it printed as it ran: one per wheel reading, predicted from the fused
+    // state (held back ~0.3 s for the laser) through the wheel readings since, and as
+    // accurate at their own time as the fused ones.
+    let printed: Vec<serde_json::Value> = live_out
+        .lines()
+        .filter(|l| l.contains("\"theta\""))
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    let mut leads: Vec<u64> = Vec::new();
+    let (mut sq, mut n) = (0.0, 0usize);
+    for p in &printed {
+        let (t, fused) = (p["t_ns"].as_u64().unwrap(), p["fused_ns"].as_u64().unwrap());
+        assert!(fused <= t, "{p}");
+        leads.push(t - fused);
+        // Before the robot moves off, the truth has not started.
+        if let Some(truth) = truth_at(&truth, t) {
+            sq += (p["x"].as_f64().unwrap() - truth.x).powi(2)
+                + (p["y"].as_f64().unwrap() - truth.y).powi(2);
+            n += 1;
+        }
+    }
+    assert!(
+        n > 200,
+        "{n} of {} printed poses within the truth",
+        printed.len()
+    );
+    leads.sort_unstable();
+    let median_lead_s = leads[leads.len() / 2] as f64 * 1e-9;
+    let printed_rmse = (sq / n as f64).sqrt();
+    eprintln!(
+        "printed: {} poses, median {median_lead_s:.3} s ahead of the fused state, position RMSE {printed_rmse:.4} m over {n}",
+        printed.len()
+    );
+    assert!(median_lead_s > 0.1, "median lead {median_lead_s} s");
+    assert!(printed_rmse <= 0.02, "printed poses' RMSE {printed_rmse} m");
 }

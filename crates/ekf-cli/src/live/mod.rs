@@ -51,10 +51,15 @@ pub struct LiveOptions {
 /// What the run reports as it goes.
 #[derive(Debug, Clone, PartialEq)]
 pub enum LiveEvent {
-    /// The estimate after a motion step.
+    /// The estimate at the newest wheel reading, one per reading as it arrives: the fused
+    /// state predicted through the wheel readings still held back (measurements made
+    /// before them may still be arriving; see [`run`]), as robot_localization's
+    /// `predict_to_current_time` does. The recording keeps the fused estimates.
     Pose {
-        /// Time (ns since the Unix epoch).
+        /// Time (ns since the Unix epoch): when the newest wheel reading was made.
         t_ns: u64,
+        /// Time of the fused state it was predicted from (ns since the Unix epoch).
+        fused_ns: u64,
         /// The pose.
         pose: Pose2<f64>,
         /// Its covariance.
@@ -179,6 +184,12 @@ fn variant(config: &Config) -> Result<Variant, LiveError> {
 
 /// Runs until `stop` is set (SIGINT/SIGTERM) or a device fails at start-up; `on_event`
 /// receives poses and device news.
+///
+/// Readings are fused in the order they were made, once none made before them can still
+/// arrive: the laser's stamp is the middle of its sweep, a few hundred milliseconds
+/// before its telegram is through the serial line. The poses reported are not that late:
+/// each wheel reading, as it arrives, predicts the fused state ahead through the wheel
+/// readings held back ([`LiveEvent::Pose`]).
 pub fn run(
     config: &Config,
     options: &LiveOptions,
@@ -290,6 +301,7 @@ pub fn run(
             Err(RecvTimeoutError::Disconnected) => break,
         };
         let mut step = Ok(());
+        let mut wheels_moved = false;
         // Everything that is waiting; then the channel is empty.
         for reading in first
             .into_iter()
@@ -328,6 +340,7 @@ pub fn run(
                     Ok(())
                 }
                 Reading::Data { at, data } => {
+                    wheels_moved |= matches!(data, Data::Base { .. });
                     live.hold_back(at, data);
                     Ok(())
                 }
@@ -341,8 +354,11 @@ pub fn run(
         let drained = Instant::now();
         if step.is_ok() {
             if let Some(until) = drained.checked_sub(live.hold) {
-                step = live.release(Some(until), on_event);
+                step = live.release(Some(until));
             }
+        }
+        if step.is_ok() && wheels_moved {
+            step = live.forecast().map(&mut *on_event);
         }
         if let Err(e) = step {
             failure = Some(e);
@@ -358,8 +374,11 @@ pub fn run(
     }
     shutdown(threads);
     // What was still held back.
-    if let Err(e) = live.release(None, on_event) {
-        failure.get_or_insert(e);
+    match live.release(None).and_then(|()| live.forecast()) {
+        Ok(pose) => on_event(pose),
+        Err(e) => {
+            failure.get_or_insert(e);
+        }
     }
     let _ = live.counters_diagnostics();
     live.finish(started, failure)
@@ -477,18 +496,14 @@ impl<'a> Live<'a> {
     }
 
     /// Fuses the held measurements made up to `until` (all with `None`), oldest first.
-    fn release(
-        &mut self,
-        until: Option<Instant>,
-        on_event: &mut dyn FnMut(LiveEvent),
-    ) -> Result<(), LiveError> {
+    fn release(&mut self, until: Option<Instant>) -> Result<(), LiveError> {
         while let Some(entry) = self.pending.first_entry() {
             let at = entry.key().0;
             if until.is_some_and(|u| at > u) {
                 break;
             }
             let data = entry.remove();
-            self.reading(at, data, on_event)?;
+            self.reading(at, data)?;
         }
         Ok(())
     }
@@ -500,12 +515,40 @@ impl<'a> Live<'a> {
         self.last_ns
     }
 
-    fn reading(
-        &mut self,
-        at: Instant,
-        data: Data,
-        on_event: &mut dyn FnMut(LiveEvent),
-    ) -> Result<(), LiveError> {
+    /// The pose now: the fused state predicted through the wheel readings held back
+    /// ([`Run::forecast`]), each turned into the joint state fusing it will record.
+    fn forecast(&self) -> Result<LiveEvent, LiveError> {
+        let (mut tracker, mut connection) = (self.tracker.clone(), self.base_connection);
+        let joint_states: Vec<_> = self
+            .pending
+            .iter()
+            .filter_map(|(&(at, _), data)| {
+                let Data::Base {
+                    reading,
+                    connection: c,
+                } = data
+                else {
+                    return None;
+                };
+                if *c != connection {
+                    tracker.restart();
+                    connection = *c;
+                }
+                let t = self.clock.stamp(at);
+                let ticks = tracker.update(*reading, t)?;
+                Some(messages::joint_state(self.config, t, ticks))
+            })
+            .collect();
+        let f = self.run.forecast(&joint_states)?;
+        Ok(LiveEvent::Pose {
+            t_ns: f.t_ns,
+            fused_ns: f.fused_ns,
+            pose: f.pose,
+            covariance: f.covariance,
+        })
+    }
+
+    fn reading(&mut self, at: Instant, data: Data) -> Result<(), LiveError> {
         let topics = &self.config.topics;
         match data {
             Data::Scan { ranges, unit } => {
@@ -528,13 +571,6 @@ impl<'a> Live<'a> {
                 let t = self.stamp(at);
                 let joints = messages::joint_state(self.config, t, ticks);
                 self.feed(&topics.joint_states.clone(), &joints)?;
-                let pose = self.run.localizer().pose();
-                let covariance = *self.run.localizer().covariance();
-                on_event(LiveEvent::Pose {
-                    t_ns: t,
-                    pose,
-                    covariance,
-                });
                 match r.bearing() {
                     Some(bearing) => {
                         let t = self.stamp(at);

@@ -19,6 +19,7 @@ pub mod summary;
 use crate::config::{Config, MotionSource};
 use crate::mcap_io::{BagMessage, BagReader, MessageError, ReadError, WriteError};
 use crate::ros2::geometry_msgs::TransformStamped;
+use crate::ros2::sensor_msgs::JointState;
 use crate::ros2::{type_name_matches, AnyMessage};
 use crate::trajectory::{StampedPose, Trajectory};
 use ekf_core::ChiSquareGate;
@@ -480,6 +481,31 @@ struct MotionClock {
     rate: Option<MotionRate>,
 }
 
+impl MotionClock {
+    /// Takes a motion step over `(t0, t1]` and returns the part of it after the time the
+    /// state already refers to (a scan or heading in between was fused at its own time,
+    /// after a prediction at the previous rate); `None` if nothing of it is left.
+    fn advance(&mut self, step: MotionStep, t0: u64, t1: u64) -> Option<MotionStep> {
+        let start = self.state_ns.map_or(t0, |s| s.max(t0));
+        self.state_ns = Some(self.state_ns.map_or(t1, |s| s.max(t1)));
+        self.rate = Some(step.rate((t1 - t0) as f64 * 1e-9));
+        (start < t1).then(|| step.part((t1 - start) as f64 / (t1 - t0) as f64))
+    }
+}
+
+/// The filter's state predicted ahead of what has been fused: see [`Run::forecast`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Forecast {
+    /// The time it refers to (ns): the newest wheel reading's stamp.
+    pub t_ns: u64,
+    /// The time of the fused state it was predicted from (ns).
+    pub fused_ns: u64,
+    /// The pose.
+    pub pose: Pose2<f64>,
+    /// Its covariance.
+    pub covariance: Matrix3<f64>,
+}
+
 /// The state of one replay loop: the filter, its outputs and the trackers that turn
 /// messages into filter inputs. `replay` drives it over a log; `ekf live` over messages
 /// it makes from devices and records, so a replay of the recording repeats it exactly.
@@ -597,11 +623,6 @@ impl<'a> Run<'a> {
     /// The output bag, when there is one (live mode records its raw messages into it).
     pub(crate) fn output(&mut self) -> Option<&mut OutputBag> {
         self.out.as_mut()
-    }
-
-    /// The filter.
-    pub(crate) fn localizer(&self) -> &Localizer {
-        &self.localizer
     }
 
     /// Finishes every output, whatever happened before, and returns the results with
@@ -739,21 +760,55 @@ impl<'a> Run<'a> {
     }
 
     /// Predicts over the motion interval `(t0, t1]`, or only its part after the time the
-    /// state already refers to (a scan or heading in between was fused at its own time,
-    /// after a prediction at the previous rate). Returns whether anything was predicted.
+    /// state already refers to ([`MotionClock::advance`]). Returns whether anything was
+    /// predicted.
     fn apply_motion(&mut self, step: MotionStep, t0: u64, t1: u64) -> Result<bool, ReplayError> {
-        let start = self.clock.state_ns.map_or(t0, |s| s.max(t0));
-        self.clock.state_ns = Some(self.clock.state_ns.map_or(t1, |s| s.max(t1)));
-        self.clock.rate = Some(step.rate((t1 - t0) as f64 * 1e-9));
-        if start >= t1 {
-            return Ok(false);
-        }
-        let fraction = (t1 - start) as f64 / (t1 - t0) as f64;
-        match step.part(fraction) {
-            MotionStep::Wheels(s) => self.localizer.predict_wheels(&s)?,
-            MotionStep::Odometry(m) => self.localizer.predict_odometry(&m)?,
+        match self.clock.advance(step, t0, t1) {
+            None => return Ok(false),
+            Some(MotionStep::Wheels(s)) => self.localizer.predict_wheels(&s)?,
+            Some(MotionStep::Odometry(m)) => self.localizer.predict_odometry(&m)?,
         }
         Ok(true)
+    }
+
+    /// The state predicted through wheel readings that have not been fused yet
+    /// (`joint_states`, oldest first, each following the last one fused): where the robot
+    /// is at the newest of them, while measurements made before it may still be on their
+    /// way (`ekf live` holds readings back until then). Each reading is predicted exactly
+    /// as fusing it would (paper eqs. 5–9, from the same encoder increments); the filter
+    /// is left as it is. Readings this run would skip are skipped; with odometry as the
+    /// motion source, or nothing to predict from, it is the fused state at its own time.
+    pub(crate) fn forecast<'m>(
+        &self,
+        joint_states: impl IntoIterator<Item = &'m JointState>,
+    ) -> Result<Forecast, ReplayError> {
+        let fused_ns = self.clock.state_ns.unwrap_or(self.start_ns);
+        let mut ekf = *self.localizer.ekf();
+        let (mut clock, mut wheels) = (self.clock, self.wheels.clone());
+        let config = self.localizer.config();
+        let mut t_ns = fused_ns;
+        for js in joint_states.into_iter().filter(|_| self.use_joints) {
+            let Some(stamp) = js.header.stamp.to_nanos().filter(|&s| s > 0) else {
+                continue;
+            };
+            let Ok(Ok(speeds)) = wheels.speeds(stamp, js) else {
+                continue;
+            };
+            let t0 = stamp - (speeds.dt * 1e9).round() as u64;
+            if let Some(MotionStep::Wheels(s)) =
+                clock.advance(MotionStep::Wheels(speeds), t0, stamp)
+            {
+                ekf.predict_wheels(&config.robot, &s, &config.wheel_noise)
+                    .map_err(LocalizerError::Filter)?;
+            }
+            t_ns = t_ns.max(stamp);
+        }
+        Ok(Forecast {
+            t_ns,
+            fused_ns,
+            pose: ekf.pose(),
+            covariance: *ekf.covariance(),
+        })
     }
 
     /// Brings the state to `t_ns` at the last motion rate before a scan or heading is
@@ -956,5 +1011,91 @@ impl<'a> Run<'a> {
             out.pose(now, &pose, self.localizer.covariance())?;
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::devices::modbus_base::WheelTicks;
+    use crate::live::messages::{self, Recorder};
+    use crate::ros2::{RosMessage, Stamped};
+
+    fn run(config: &Config) -> Run<'_> {
+        let options = ReplayOptions {
+            mode: Mode::Compass,
+            map: None,
+            init_from_truth: false,
+            out_mcap: None,
+            tum: None,
+            keep_trajectories: false,
+        };
+        let preamble = Preamble {
+            scan_frame: None,
+            transforms: Vec::new(),
+            first_reference: None,
+        };
+        let t = &config.topics.joint_states;
+        Run::start(config, &options, &preamble, true, "test", t).unwrap()
+    }
+
+    fn feed<M: RosMessage + Stamped>(
+        run: &mut Run<'_>,
+        recorder: &mut Recorder,
+        topic: &str,
+        m: &M,
+    ) {
+        run.handle(&recorder.record(None, topic, m).unwrap())
+            .unwrap();
+    }
+
+    #[test]
+    fn a_forecast_is_the_state_fusing_the_wheel_readings_would_give() {
+        let config = Config::default();
+        let (mut fused, mut all) = (run(&config), run(&config));
+        let mut recorder = Recorder::new(Path::new("test"));
+        // Wheel readings every 0.1 s of a robot turning left; a compass heading between
+        // the second and third, so the third is predicted only over its last half.
+        let joints: Vec<_> = (0..6)
+            .map(|i| {
+                let ticks = WheelTicks {
+                    left: 40 * i,
+                    right: 55 * i,
+                };
+                messages::joint_state(&config, 1_000_000_000 + i as u64 * 100_000_000, ticks)
+            })
+            .collect();
+        // A bearing of 90° less a little: heading 0.02 rad, within the gate.
+        let bearing = std::f64::consts::FRAC_PI_2 - 0.02;
+        let heading = messages::compass(&config, 1_150_000_000, bearing);
+        let (topic, compass) = (&config.topics.joint_states, &config.topics.compass);
+        for run in [&mut fused, &mut all] {
+            feed(run, &mut recorder, topic, &joints[0]);
+            feed(run, &mut recorder, topic, &joints[1]);
+            feed(run, &mut recorder, compass, &heading);
+        }
+        for j in &joints[2..] {
+            feed(&mut all, &mut recorder, topic, j);
+        }
+        assert_eq!(fused.summary.compass.accepted, 1);
+        let before = *fused.localizer.ekf();
+        let forecast = fused.forecast(&joints[2..]).unwrap();
+
+        assert_eq!(
+            *fused.localizer.ekf(),
+            before,
+            "the filter is left as it was"
+        );
+        assert_eq!(forecast.fused_ns, 1_150_000_000);
+        assert_eq!(forecast.t_ns, 1_500_000_000);
+        assert_eq!(forecast.pose, all.localizer.pose());
+        assert_eq!(forecast.covariance, *all.localizer.covariance());
+        assert!(
+            forecast.pose.theta > before.pose().theta + 0.01,
+            "it turned"
+        );
+        // Nothing held back: the fused state at its own time.
+        let now = fused.forecast(&[]).unwrap();
+        assert_eq!((now.t_ns, now.pose), (1_150_000_000, before.pose()));
     }
 }
