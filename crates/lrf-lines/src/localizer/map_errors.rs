@@ -279,9 +279,11 @@ impl MapErrors {
 
     /// Applies the estimate `δb` of the placement's error (true minus placed, as every
     /// error here): the map moves rigidly from the pose it was placed from, `x_b`, to
-    /// `x_b + δb`, and the walls' `G` are taken at the new placement. A wall whose line
+    /// `x_b + δb` (each wall's line by [`Line::from_frame`] of that motion, its end points
+    /// with it), and the walls' `G` are taken at the new placement. A wall whose line
     /// comes out written the other way round (it passes near the origin) has its error
-    /// flipped with it. Fails, before moving anything, if a result is not finite.
+    /// flipped with it. Fails, before moving anything, if the correction or the errors
+    /// are not finite (finite ones move a finite map to a finite one).
     fn correct(&mut self, delta: &Vector3<f64>, map: &mut LineMap) -> Result<(), Error> {
         let p = &self.placement;
         if !(all_finite(delta.as_slice())
@@ -296,17 +298,13 @@ impl MapErrors {
         let old = p.pose;
         let new = Pose2::new(old.x + delta.x, old.y + delta.y, old.theta + delta.z);
         let motion = new.compose(&old.inverse());
-        for segment in &map.segments {
-            let moved = |q| motion.transform_point(q);
-            Line::from_segment(&moved(&segment.start), &moved(&segment.end))?;
-        }
         self.placement.pose = new;
         for (segment, wall) in map.segments.iter_mut().zip(&mut self.walls) {
             let (start, end) = (
                 motion.transform_point(&segment.start),
                 motion.transform_point(&segment.end),
             );
-            let line = Line::from_segment(&start, &end)?;
+            let line = segment.line.from_frame(&motion);
             let turned = angle_diff(line.beta, segment.line.beta + delta.z);
             if turned.abs() > core::f64::consts::FRAC_PI_2 {
                 *wall = wall.flipped();
