@@ -63,7 +63,7 @@ fn lap(localizer: &mut Localizer, seed: u64) -> Lap {
         dead_reckoning = robot.motion(&odo).apply(&dead_reckoning);
         localizer.predict_wheels(&odo).unwrap();
         if k % 2 == 0 {
-            let heading = truth.theta + 2.0_f64.to_radians() * rng.normal();
+            let heading = truth.theta + 2.0_f64.to_radians() * rng.normal_floored();
             localizer.update_compass(heading).unwrap();
         }
         let r = ranges(&truth, &walls, &mut rng);
