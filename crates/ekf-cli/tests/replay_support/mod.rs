@@ -8,6 +8,8 @@
 
 #![allow(dead_code)] // each test file uses a different part
 
+#[path = "../ekf_bin/mod.rs"]
+mod ekf_bin;
 #[path = "../gauss_rng/mod.rs"]
 mod gauss_rng;
 
@@ -22,7 +24,7 @@ pub use gauss_rng::Rng;
 use std::collections::BTreeMap;
 use std::f64::consts::{FRAC_PI_2, PI};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
 /// First stamp: a realistic epoch time with nanoseconds that an `f64` would not keep.
 pub const T0_NS: u64 = 1_700_000_000_123_456_789;
@@ -524,10 +526,7 @@ pub fn write_scenario(dir: &Path, name: &str, s: &Scenario) -> (PathBuf, Vec<Ite
 
 /// Runs the real `ekf` binary.
 pub fn ekf(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_ekf"))
-        .args(args)
-        .output()
-        .expect("run ekf")
+    ekf_bin::ekf().args(args).output().expect("run ekf")
 }
 
 /// stdout and stderr as text.
