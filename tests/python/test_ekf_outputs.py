@@ -50,6 +50,11 @@ def decode(path):
     return by_topic
 
 
+def with_messages(outputs):
+    """The outputs of an `ekf` run (the bag path first) and, last, the bag's messages by topic."""
+    return (*outputs, decode(outputs[0]))
+
+
 def types_and_counts(by_topic):
     return {t: (ms[0].schema.name, len(ms)) for t, ms in by_topic.items()}
 
@@ -153,8 +158,7 @@ def carmen_scans(shared_data):
 
 @pytest.fixture(scope="module")
 def mrpt(mrpt_import):
-    bag, summary = mrpt_import
-    return bag, summary, decode(bag)
+    return with_messages(mrpt_import)
 
 
 def test_mrpt_bag_structure(mrpt):
@@ -221,8 +225,7 @@ def test_mrpt_laser_mount_in_tf_static(mrpt):
 
 @pytest.fixture(scope="module")
 def carmen(carmen_import):
-    bag, summary = carmen_import
-    return bag, summary, decode(bag)
+    return with_messages(carmen_import)
 
 
 def test_carmen_bag_structure(carmen):
@@ -302,8 +305,7 @@ def test_carmen_synthetic_compass_is_truth_plus_2_degrees_noise(carmen):
 
 @pytest.fixture(scope="module")
 def replayed(replay):
-    bag, tum, summary = replay
-    return bag, tum, summary, decode(bag)
+    return with_messages(replay)
 
 
 def test_replay_bag_structure(replayed):

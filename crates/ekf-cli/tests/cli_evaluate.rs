@@ -1,7 +1,9 @@
 //! `ekf evaluate` end to end: the binary's JSON equals evo's numbers for the golden pair,
 //! and a missing file is a clear error with a non-zero exit.
 
-use std::process::Command;
+mod ekf_bin;
+
+use ekf_bin::{ekf, run_fails, run_ok};
 
 fn golden(name: &str) -> String {
     format!("{}/tests/golden/{name}", env!("CARGO_MANIFEST_DIR"))
@@ -15,31 +17,21 @@ fn evo_case(case: &str, metric: &str) -> f64 {
 
 /// Runs `ekf evaluate ARGS`, which must fail, and returns what it printed on stderr.
 fn evaluate_fails(args: &[&str]) -> String {
-    let out = Command::new(env!("CARGO_BIN_EXE_ekf"))
-        .arg("evaluate")
-        .args(args)
-        .output()
-        .unwrap();
-    assert!(!out.status.success(), "ekf evaluate {args:?} succeeded");
+    let out = run_fails(ekf().arg("evaluate").args(args));
     String::from_utf8_lossy(&out.stderr).into_owned()
 }
 
 fn run_json(extra: &[&str]) -> serde_json::Value {
-    let out = Command::new(env!("CARGO_BIN_EXE_ekf"))
-        .args([
-            "evaluate",
-            &golden("evo_est.txt"),
-            "--truth",
-            &golden("evo_ref.txt"),
-            "--json",
-        ])
-        .args(extra)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "stderr: {}",
-        String::from_utf8_lossy(&out.stderr)
+    let out = run_ok(
+        ekf()
+            .args([
+                "evaluate",
+                &golden("evo_est.txt"),
+                "--truth",
+                &golden("evo_ref.txt"),
+                "--json",
+            ])
+            .args(extra),
     );
     serde_json::from_slice(&out.stdout).unwrap()
 }
@@ -72,38 +64,29 @@ fn mcap_and_tum_outputs_of_a_replay_evaluate_the_same() {
     let dir = tempfile::tempdir().unwrap();
     let (mcap, tum) = (dir.path().join("est.mcap"), dir.path().join("est.tum"));
     let data = |f: &str| format!("{}/../../testdata/{f}", env!("CARGO_MANIFEST_DIR"));
-    let replay = Command::new(env!("CARGO_BIN_EXE_ekf"))
-        .args([
-            "replay",
-            &data("aces.mcap"),
-            "--map",
-            &data("aces-map.json"),
-            "--init-from-truth",
-            "--mode",
-            "laser",
-        ])
-        .arg("--out")
-        .arg(&mcap)
-        .arg("--tum")
-        .arg(&tum)
-        .output()
-        .unwrap();
-    assert!(
-        replay.status.success(),
-        "{}",
-        String::from_utf8_lossy(&replay.stderr)
+    let aces = data("aces.mcap");
+    run_ok(
+        ekf()
+            .args([
+                "replay",
+                &aces,
+                "--map",
+                &data("aces-map.json"),
+                "--init-from-truth",
+                "--mode",
+                "laser",
+            ])
+            .arg("--out")
+            .arg(&mcap)
+            .arg("--tum")
+            .arg(&tum),
     );
     let ate = |est: &std::path::Path| {
-        let out = Command::new(env!("CARGO_BIN_EXE_ekf"))
-            .arg("evaluate")
-            .arg(est)
-            .args(["--truth", &data("aces.mcap"), "--json"])
-            .output()
-            .unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
+        let out = run_ok(
+            ekf()
+                .arg("evaluate")
+                .arg(est)
+                .args(["--truth", &aces, "--json"]),
         );
         let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
         (
@@ -119,13 +102,12 @@ fn mcap_and_tum_outputs_of_a_replay_evaluate_the_same() {
         "{from_mcap:?} vs {from_tum:?}"
     );
     // A bag without a pose topic names the topics it has.
-    let err = evaluate_fails(&[&data("mrpt-office.mcap"), "--truth", &data("aces.mcap")]);
+    let err = evaluate_fails(&[&data("mrpt-office.mcap"), "--truth", &aces]);
     assert!(
         err.contains("no pose topic") && err.contains("/scan (sensor_msgs/msg/LaserScan)"),
         "{err}"
     );
     // A named topic that carries no poses is refused, not read as an empty trajectory.
-    let aces = data("aces.mcap");
     let err = evaluate_fails(&[&aces, "--est-topic", "/scan", "--truth", &aces]);
     assert_eq!(
         err,

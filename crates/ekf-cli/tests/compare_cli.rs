@@ -2,9 +2,10 @@
 //! error (non-zero exit, the topic named) on a log without a reference.
 
 mod compare_common;
+mod ekf_bin;
 
 use compare_common::{write_room_bag, BagContents};
-use std::process::Command;
+use ekf_bin::{ekf, run_fails, run_ok};
 
 #[test]
 fn json_and_svg_from_the_binary() {
@@ -12,19 +13,14 @@ fn json_and_svg_from_the_binary() {
     let log = dir.path().join("room.mcap");
     let svg = dir.path().join("fig9_10.svg");
     write_room_bag(&log, BagContents::default());
-    let out = Command::new(env!("CARGO_BIN_EXE_ekf"))
-        .arg("compare")
-        .arg(&log)
-        .arg("--init-from-truth")
-        .arg("--svg")
-        .arg(&svg)
-        .arg("--json")
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "stderr: {}",
-        String::from_utf8_lossy(&out.stderr)
+    let out = run_ok(
+        ekf()
+            .arg("compare")
+            .arg(&log)
+            .arg("--init-from-truth")
+            .arg("--svg")
+            .arg(&svg)
+            .arg("--json"),
     );
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("stdout is one JSON");
     let modes = v["modes"].as_array().unwrap();
@@ -63,12 +59,7 @@ fn no_reference_fails_and_names_the_topic() {
             ..BagContents::default()
         },
     );
-    let out = Command::new(env!("CARGO_BIN_EXE_ekf"))
-        .arg("compare")
-        .arg(&log)
-        .output()
-        .unwrap();
-    assert!(!out.status.success());
+    let out = run_fails(ekf().arg("compare").arg(&log));
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(
         stderr.contains("needs a reference") && stderr.contains("/ground_truth"),

@@ -43,6 +43,14 @@ fn assert_stats(case: &str, what: &str, ours: &Statistics, theirs: &Value) {
     }
 }
 
+/// The count and both statistics of one case against evo's.
+fn assert_case(case: &str, count: usize, translation: &Statistics, heading: &Statistics) {
+    let want = expected(case);
+    assert_eq!(count as u64, want["count"].as_u64().unwrap(), "{case}");
+    assert_stats(case, "translation", translation, &want["translation_m"]);
+    assert_stats(case, "heading", heading, &want["heading_error_deg"]);
+}
+
 fn check_ape(case: &str, alignment: AlignmentOptions) {
     let (reference, estimate) = inputs(case.ends_with("_swapped"));
     let options = ApeOptions {
@@ -50,23 +58,11 @@ fn check_ape(case: &str, alignment: AlignmentOptions) {
         ..ApeOptions::default()
     };
     let result = ape(&reference, &estimate, &options).unwrap().summary;
-    let want = expected(case);
-    assert_eq!(
-        result.matched_poses as u64,
-        want["count"].as_u64().unwrap(),
-        "{case}"
-    );
-    assert_stats(
+    assert_case(
         case,
-        "translation",
+        result.matched_poses,
         &result.translation_m,
-        &want["translation_m"],
-    );
-    assert_stats(
-        case,
-        "heading",
         &result.heading_error_deg,
-        &want["heading_error_deg"],
     );
 }
 
@@ -78,23 +74,11 @@ fn check_rpe(case: &str, delta_frames: usize, all_pairs: bool) {
         ..RpeOptions::default()
     };
     let result = rpe(&reference, &estimate, &options).unwrap().summary;
-    let want = expected(case);
-    assert_eq!(
-        result.pairs as u64,
-        want["count"].as_u64().unwrap(),
-        "{case}"
-    );
-    assert_stats(
+    assert_case(
         case,
-        "translation",
+        result.pairs,
         &result.translation_m,
-        &want["translation_m"],
-    );
-    assert_stats(
-        case,
-        "heading",
         &result.heading_error_deg,
-        &want["heading_error_deg"],
     );
 }
 

@@ -9,7 +9,7 @@ mod extraction_support;
 
 use ekf_core::{angle_diff, Pose2};
 use extraction_support::{simulate, Rng, Scanner, Wall};
-use lrf_lines::{ExtractionParams, LaserScan, LineExtractor};
+use lrf_lines::{ExtractionParams, LineExtractor};
 use nalgebra::Point2;
 
 const SIGMA_RANGE: f64 = 0.03;
@@ -55,13 +55,7 @@ fn reported_covariance_matches_monte_carlo_spread() {
             SIGMA_BEARING,
             &mut rng,
         );
-        let scan = LaserScan {
-            angle_min: scanner.angle_min,
-            angle_increment: scanner.angle_increment,
-            range_min: 0.05,
-            range_max: scanner.range_max,
-            ranges: &ranges,
-        };
+        let scan = scanner.scan(&ranges);
         extractor.extract(&scan, &mut lines).unwrap();
         assert_eq!(lines.len(), 1, "{lines:#?}");
         let l = &lines[0];

@@ -49,35 +49,25 @@ fn scan_ranges(angle_min: f64, inc: f64, lines: &[(f64, f64)], junk: &[Option<f3
         .collect()
 }
 
-fn params() -> impl Strategy<Value = ExtractionParams> {
-    (
-        0.001..0.1,
-        0.0..0.01,
-        0.01..0.3,
-        0.05..1.0,
-        2usize..12,
-        0.0..1.0,
-    )
-        .prop_map(
-            |(
-                range_sigma,
-                bearing_sigma,
-                split_distance,
-                max_point_gap,
-                min_points,
-                min_length,
-            )| {
-                ExtractionParams {
-                    range_sigma,
-                    bearing_sigma,
-                    split_distance,
-                    max_point_gap,
-                    min_points,
-                    min_length,
-                    merge_probability: 0.99,
-                }
-            },
-        )
+prop_compose! {
+    fn params()(
+        range_sigma in 0.001..0.1,
+        bearing_sigma in 0.0..0.01,
+        split_distance in 0.01..0.3,
+        max_point_gap in 0.05..1.0,
+        min_points in 2usize..12,
+        min_length in 0.0..1.0,
+    ) -> ExtractionParams {
+        ExtractionParams {
+            range_sigma,
+            bearing_sigma,
+            split_distance,
+            max_point_gap,
+            min_points,
+            min_length,
+            merge_probability: 0.99,
+        }
+    }
 }
 
 proptest! {

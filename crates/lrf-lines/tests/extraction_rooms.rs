@@ -14,7 +14,7 @@ use ekf_core::angle_diff;
 use extraction_support::{
     corridor, l_shape, pillar_room, rectangle, simulate, visible_pieces, Piece, Rng, Room, Scanner,
 };
-use lrf_lines::{ExtractionParams, LaserScan, LineExtractor, ObservedLine};
+use lrf_lines::{ExtractionParams, LineExtractor, ObservedLine};
 
 const SIGMA_RANGE: f64 = 0.03;
 
@@ -67,13 +67,7 @@ fn check_room(room: &Room, step_deg: f64, seed: u64) {
         0.0,
         &mut Rng::new(seed),
     );
-    let scan = LaserScan {
-        angle_min: scanner.angle_min,
-        angle_increment: scanner.angle_increment,
-        range_min: 0.05,
-        range_max: scanner.range_max,
-        ranges: &ranges,
-    };
+    let scan = scanner.scan(&ranges);
     let mut extractor = LineExtractor::new(params()).unwrap();
     let mut got: Vec<ObservedLine> = Vec::new();
     extractor.extract(&scan, &mut got).unwrap();

@@ -47,6 +47,22 @@ struct Lap {
     consistent_steps: usize,
 }
 
+impl std::fmt::Display for Lap {
+    /// The errors, the fused scans and the consistent steps.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "max {:.4} m, rms {:.4} m, max heading {:.3}°, {}/{} scans fused, {} consistent",
+            self.max_position_error,
+            self.rms_position_error,
+            self.max_heading_error.to_degrees(),
+            self.scans_with_fusion,
+            self.scans,
+            self.consistent_steps
+        )
+    }
+}
+
 /// Drives one lap; scans every step, compass every other step.
 fn lap(localizer: &mut Localizer, seed: u64) -> Lap {
     let walls = walls();
@@ -63,7 +79,7 @@ fn lap(localizer: &mut Localizer, seed: u64) -> Lap {
         dead_reckoning = robot.motion(&odo).apply(&dead_reckoning);
         localizer.predict_wheels(&odo).unwrap();
         if k % 2 == 0 {
-            let heading = truth.theta + 2.0_f64.to_radians() * rng.normal();
+            let heading = truth.theta + 2.0_f64.to_radians() * rng.normal_floored();
             localizer.update_compass(heading).unwrap();
         }
         let r = ranges(&truth, &walls, &mut rng);
@@ -112,13 +128,7 @@ fn a_lap_with_a_known_map_stays_accurate_and_consistent() {
         Localizer::new(exact, start(), initial_covariance(), map_of(&walls())).unwrap();
     let lap = lap(&mut localizer, 1);
     let summary = format!(
-        "max {:.4} m, rms {:.4} m, max heading {:.3}°, {}/{} scans fused, {} consistent, odometry alone {:.3} m",
-        lap.max_position_error,
-        lap.rms_position_error,
-        lap.max_heading_error.to_degrees(),
-        lap.scans_with_fusion,
-        lap.scans,
-        lap.consistent_steps,
+        "{lap}, odometry alone {:.3} m",
         lap.odometry_only_final_error
     );
     assert!(
@@ -160,16 +170,7 @@ fn a_lap_with_the_first_scan_map_stays_accurate() {
     assert!(localizer.map().len() >= 3, "{:#?}", localizer.map());
     assert_eq!(localizer.map().len(), report.extracted);
     let lap = lap(&mut localizer, 2);
-    let summary = format!(
-        "max {:.4} m, rms {:.4} m, max heading {:.3}°, {}/{} scans fused, {} consistent, map {:#?}",
-        lap.max_position_error,
-        lap.rms_position_error,
-        lap.max_heading_error.to_degrees(),
-        lap.scans_with_fusion,
-        lap.scans,
-        lap.consistent_steps,
-        localizer.map()
-    );
+    let summary = format!("{lap}, map {:#?}", localizer.map());
     // The left wall is not in this map: facing it, the heading rests on the compass
     // (σ = 2°) and the biased odometry alone, hence the looser heading bound. The map is
     // one noisy scan, and each wall carries its fit error as a considered error, so the
@@ -208,39 +209,30 @@ fn a_compass_outlier_is_gated_out() {
 fn bad_config_and_scans_are_named_errors() {
     let build =
         |c: LocalizerConfig| Localizer::new(c, start(), initial_covariance(), LineMap::default());
-    let mut c = config();
-    c.robot.track = 0.0;
-    let e = build(c).unwrap_err();
-    assert!(
-        matches!(e, LocalizerError::Config { group: "robot", .. }),
-        "{e}"
-    );
-    assert!(e.to_string().contains("[robot]") && e.to_string().contains("track"));
-    let mut c = config();
-    c.compass.variance = 0.0;
-    assert!(matches!(
-        build(c).unwrap_err(),
-        LocalizerError::Config {
-            group: "compass",
-            ..
-        }
-    ));
-    let mut c = config();
-    c.matching.gate_probability = 2.0;
-    assert!(matches!(
-        build(c).unwrap_err(),
-        LocalizerError::Config {
-            group: "matching",
-            ..
-        }
-    ));
-    let mut c = config();
-    c.extraction = ExtractionParams {
-        min_points: 1,
-        ..ExtractionParams::default()
+    // The error of the default config changed by `edit`.
+    let refused = |edit: fn(&mut LocalizerConfig)| {
+        let mut c = config();
+        edit(&mut c);
+        build(c).unwrap_err()
     };
+    // The same, which must be a config error of `group`.
+    let refused_in = |group: &str, edit: fn(&mut LocalizerConfig)| {
+        let e = refused(edit);
+        assert!(
+            matches!(e, LocalizerError::Config { group: g, .. } if g == group),
+            "{e}"
+        );
+        e
+    };
+    let e = refused_in("robot", |c| c.robot.track = 0.0);
+    assert!(e.to_string().contains("[robot]") && e.to_string().contains("track"));
+    refused_in("compass", |c| c.compass.variance = 0.0);
+    refused_in("matching", |c| c.matching.gate_probability = 2.0);
     assert!(matches!(
-        build(c).unwrap_err(),
+        refused(|c| c.extraction = ExtractionParams {
+            min_points: 1,
+            ..ExtractionParams::default()
+        }),
         LocalizerError::Extraction(ExtractionError::InvalidParameter {
             name: "min_points",
             ..

@@ -15,12 +15,16 @@
 
 #![allow(dead_code)]
 
+#[path = "../gauss_rng/mod.rs"]
+mod gauss_rng;
+
 use ekf_cli::mcap_io::BagWriter;
 use ekf_cli::ros2::builtin_interfaces::Time;
 use ekf_cli::ros2::geometry_msgs::{Point, Pose, PoseWithCovariance, Quaternion};
 use ekf_cli::ros2::nav_msgs::Odometry;
 use ekf_cli::ros2::sensor_msgs::{Imu, JointState, LaserScan};
 use ekf_cli::ros2::std_msgs::Header;
+use gauss_rng::Rng;
 use std::f64::consts::{FRAC_PI_2, PI};
 use std::path::Path;
 
@@ -62,29 +66,6 @@ impl Default for BagContents {
             compass: true,
             reference: true,
         }
-    }
-}
-
-/// SplitMix64 with Box–Muller normals: deterministic noise without dependencies.
-struct Rng(u64);
-
-impl Rng {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in (0, 1].
-    fn uniform(&mut self) -> f64 {
-        ((self.next_u64() >> 11) + 1) as f64 / (1u64 << 53) as f64
-    }
-
-    fn normal(&mut self, sigma: f64) -> f64 {
-        let (u1, u2) = (self.uniform(), self.uniform());
-        sigma * (-2.0 * u1.ln()).sqrt() * (2.0 * PI * u2).cos()
     }
 }
 
@@ -158,7 +139,7 @@ fn header(t_ns: u64, frame: &str) -> Header {
 
 /// Writes the bag to `path`.
 pub fn write_room_bag(path: &Path, contents: BagContents) {
-    let mut rng = Rng(20_240_611);
+    let mut rng = Rng::new(20_240_611);
     let mut bag = BagWriter::create(path).expect("create bag");
     let mut pose = (0.0, 0.0, 0.0);
     let mut wheel_positions = (0.0, 0.0);
@@ -196,7 +177,7 @@ pub fn write_room_bag(path: &Path, contents: BagContents) {
         let ranges = (0..beams)
             .map(|i| {
                 let bearing = -PI + f64::from(i) * increment;
-                (ray_cast(x, y, th + bearing) + rng.normal(RANGE_SIGMA)) as f32
+                (ray_cast(x, y, th + bearing) + rng.gauss(RANGE_SIGMA)) as f32
             })
             .collect();
         let scan_ns = t_ns + 1_000_000;
@@ -241,7 +222,7 @@ pub fn write_room_bag(path: &Path, contents: BagContents) {
                 "/compass",
                 &Imu {
                     header: header(t_ns + 2_000_000, "imu"),
-                    orientation: Quaternion::from_yaw(th + rng.normal(COMPASS_SIGMA)),
+                    orientation: Quaternion::from_yaw(th + rng.gauss(COMPASS_SIGMA)),
                     orientation_covariance: covariance,
                     ..Imu::default()
                 },

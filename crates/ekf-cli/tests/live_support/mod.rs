@@ -3,14 +3,13 @@
 
 #![allow(dead_code)] // each test crate uses its own part
 
+#[path = "../ekf_bin/mod.rs"]
+mod ekf_bin;
+
+pub use ekf_bin::ekf;
+use ekf_bin::run_ok;
 use ekf_cli::mcap_io::BagReader;
 use std::path::Path;
-use std::process::Command;
-
-/// The `ekf` binary under test.
-pub fn ekf() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_ekf"))
-}
 
 /// `(log time, CDR bytes)` of every message on `topic` of a bag.
 pub fn messages(path: &Path, topic: &str) -> Vec<(u64, Vec<u8>)> {
@@ -33,18 +32,13 @@ pub fn assert_replay_gives_the_same_poses(
     args: &[&std::ffi::OsStr],
     min_poses: usize,
 ) {
-    let out = ekf()
-        .arg("replay")
-        .arg(recording)
-        .args(args)
-        .arg("--out")
-        .arg(replayed)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    run_ok(
+        ekf()
+            .arg("replay")
+            .arg(recording)
+            .args(args)
+            .arg("--out")
+            .arg(replayed),
     );
     let live_poses = messages(recording, "/ekf/pose");
     assert!(live_poses.len() > min_poses, "{}", live_poses.len());

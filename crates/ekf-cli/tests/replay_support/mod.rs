@@ -8,6 +8,11 @@
 
 #![allow(dead_code)] // each test file uses a different part
 
+#[path = "../ekf_bin/mod.rs"]
+mod ekf_bin;
+#[path = "../gauss_rng/mod.rs"]
+mod gauss_rng;
+
 use ekf_cli::mcap_io::{BagReader, BagWriter};
 use ekf_cli::ros2::build::{self, header};
 use ekf_cli::ros2::geometry_msgs::{Quaternion, Transform, TransformStamped, Vector3};
@@ -15,10 +20,11 @@ use ekf_cli::ros2::nav_msgs::Odometry;
 use ekf_cli::ros2::sensor_msgs::{Imu, JointState, LaserScan};
 use ekf_cli::ros2::tf2_msgs::TFMessage;
 use ekf_cli::ros2::AnyMessage;
+pub use gauss_rng::Rng;
 use std::collections::BTreeMap;
 use std::f64::consts::{FRAC_PI_2, PI};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
 /// First stamp: a realistic epoch time with nanoseconds that an `f64` would not keep.
 pub const T0_NS: u64 = 1_700_000_000_123_456_789;
@@ -149,33 +155,6 @@ pub struct Item {
     pub topic: String,
     /// The message.
     pub msg: AnyMessage,
-}
-
-/// SplitMix64 with Box–Muller: deterministic Gaussian noise without a dependency.
-pub struct Rng(u64);
-
-impl Rng {
-    pub fn new(seed: u64) -> Self {
-        Self(seed)
-    }
-
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in (0, 1].
-    fn uniform(&mut self) -> f64 {
-        ((self.next_u64() >> 11) + 1) as f64 / (1u64 << 53) as f64
-    }
-
-    pub fn gauss(&mut self, sigma: f64) -> f64 {
-        let (u1, u2) = (self.uniform(), self.uniform());
-        sigma * (-2.0 * u1.ln()).sqrt() * (2.0 * PI * u2).cos()
-    }
 }
 
 /// One piece of the drive: forward speed (m/s) and turn rate (rad/s) held for `secs`.
@@ -547,10 +526,7 @@ pub fn write_scenario(dir: &Path, name: &str, s: &Scenario) -> (PathBuf, Vec<Ite
 
 /// Runs the real `ekf` binary.
 pub fn ekf(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_ekf"))
-        .args(args)
-        .output()
-        .expect("run ekf")
+    ekf_bin::ekf().args(args).output().expect("run ekf")
 }
 
 /// stdout and stderr as text.

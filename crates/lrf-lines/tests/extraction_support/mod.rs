@@ -2,35 +2,12 @@
 //! against wall segments, the synthetic rooms, and the list of wall pieces a scan shows.
 #![allow(dead_code)] // Each test binary uses a different part of this module.
 
+#[path = "../rng_support/mod.rs"]
+mod rng_support;
+
 use ekf_core::{Line, Pose2};
 use nalgebra::Point2;
-
-/// SplitMix64 with Box-Muller normals: tiny, deterministic, good enough for noise.
-pub struct Rng(u64);
-
-impl Rng {
-    /// A generator from a seed.
-    pub fn new(seed: u64) -> Self {
-        Self(seed)
-    }
-
-    /// Uniform in [0, 1).
-    pub fn uniform(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^= z >> 31;
-        (z >> 11) as f64 / (1u64 << 53) as f64
-    }
-
-    /// Standard normal (Box-Muller).
-    pub fn normal(&mut self) -> f64 {
-        let u1 = 1.0 - self.uniform(); // (0, 1]
-        let u2 = self.uniform();
-        (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
-    }
-}
+pub use rng_support::Rng;
 
 /// A wall (or a face of a piece of furniture) from `a` to `b` in the world frame.
 #[derive(Debug, Clone, Copy)]

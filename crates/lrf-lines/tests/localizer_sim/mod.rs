@@ -53,8 +53,8 @@ pub fn commands() -> Vec<WheelSpeeds<f64>> {
 /// What the encoders report: the right wheel reads 3 % fast, both with noise 0.1 rad/s.
 pub fn measured(true_speeds: &WheelSpeeds<f64>, rng: &mut Rng) -> WheelSpeeds<f64> {
     WheelSpeeds::new(
-        true_speeds.left + 0.1 * rng.normal(),
-        1.03 * true_speeds.right + 0.1 * rng.normal(),
+        true_speeds.left + 0.1 * rng.normal_floored(),
+        1.03 * true_speeds.right + 0.1 * rng.normal_floored(),
         true_speeds.dt,
     )
     .unwrap()

@@ -1,9 +1,13 @@
 //! Synthetic rooms and line observations shared by the map, matching and localizer tests.
 #![allow(dead_code)] // each test crate uses a different part
 
+#[path = "../rng_support/mod.rs"]
+mod rng_support;
+
 use ekf_core::{Line, Pose2};
 use lrf_lines::ObservedLine;
 use nalgebra::{Matrix2, Point2};
+pub use rng_support::Rng;
 
 /// A wall from one end point to the other (world frame).
 pub type Wall = (Point2<f64>, Point2<f64>);
@@ -18,32 +22,6 @@ pub fn rect_room(x0: f64, y0: f64, x1: f64, y1: f64) -> Vec<Wall> {
         (p(x1, y1), p(x0, y1)),
         (p(x0, y1), p(x0, y0)),
     ]
-}
-
-/// A small deterministic generator (SplitMix64) with Gaussian samples.
-pub struct Rng(u64);
-
-impl Rng {
-    pub fn new(seed: u64) -> Self {
-        Self(seed)
-    }
-
-    /// Uniform in [0, 1).
-    pub fn uniform(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^= z >> 31;
-        (z >> 11) as f64 / (1u64 << 53) as f64
-    }
-
-    /// Standard normal (Box–Muller).
-    pub fn normal(&mut self) -> f64 {
-        let u1 = self.uniform().max(1e-300);
-        let u2 = self.uniform();
-        (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos()
-    }
 }
 
 /// Noise of a synthetic observation: standard deviations of `r` (m) and `ψ` (rad). The
@@ -76,8 +54,8 @@ pub fn observe_part(
     let mut line = Line::from_segment(&a, &b).unwrap();
     if let Some(rng) = rng {
         line = Line::new(
-            line.rho + noise.sigma_r * rng.normal(),
-            line.beta + noise.sigma_psi * rng.normal(),
+            line.rho + noise.sigma_r * rng.normal_floored(),
+            line.beta + noise.sigma_psi * rng.normal_floored(),
         )
         .unwrap();
     }
@@ -157,7 +135,7 @@ pub fn ray_cast(
             }
             if best < range_max {
                 if let Some(rng) = rng.as_deref_mut() {
-                    best += sigma * rng.normal();
+                    best += sigma * rng.normal_floored();
                 }
             }
             best as f32
