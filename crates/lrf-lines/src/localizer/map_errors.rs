@@ -38,6 +38,9 @@ struct WallError {
     cross: Matrix3x2<f64>,
     /// `Y = Cov(b, f)`: the placement's error correlated with the wall's fit error.
     placement_cross: Matrix3x2<f64>,
+    /// The placement the wall's segment and `G` were last moved to (see
+    /// [`MapErrors::move_wall`]).
+    placed_from: Pose2<f64>,
 }
 
 impl WallError {
@@ -146,6 +149,7 @@ impl MapErrors {
                     placement_jacobian,
                     cross: Matrix3x2::zeros(),
                     placement_cross: Matrix3x2::zeros(),
+                    placed_from: *pose,
                 }
             })
             .collect();
@@ -213,7 +217,7 @@ impl MapErrors {
 
     /// After a measurement of the state alone (`h(x)`, innovation `inn`, no wall) was
     /// fused with `outcome`: the placement takes its share of the innovation and the
-    /// correlations are carried along. Moves `map` by the placement's correction. Fails
+    /// correlations are carried along. Moves `map`'s walls with the placement. Fails
     /// on a non-finite result, leaving things half updated: the caller restores what it
     /// [saved](Self::save).
     pub(crate) fn state_measured<const M: usize>(
@@ -234,19 +238,21 @@ impl MapErrors {
         }
         self.placement.covariance =
             symmetric(&(self.placement.covariance - k_b * inn.s * k_b.transpose()));
-        self.correct(&(k_b * inn.y), map)
+        self.correct(&(k_b * inn.y))?;
+        self.move_walls(map);
+        Ok(())
     }
 
     /// After a line matched to wall `j` was fused (with `considered` from
-    /// [`WallErrors::considered`], outcome `update`): as
-    /// [`state_measured`](Self::state_measured), with the wall's own error in the
-    /// correlations.
+    /// [`WallErrors::considered`], outcome `update`, wall `j` [moved](Self::move_wall) to
+    /// the placement first): as [`state_measured`](Self::state_measured), with the wall's
+    /// own error in the correlations, but the walls stay where they are until moved (a
+    /// scan's lines are fused one after the other; each needs only its own wall moved).
     pub(crate) fn line_fused(
         &mut self,
         j: usize,
         considered: &Considered<f64, 2, 2>,
         update: &ConsideredUpdate<f64, 2>,
-        map: &mut LineMap,
     ) -> Result<(), Error> {
         let Some(fused) = self.walls.get(j).copied() else {
             return Ok(());
@@ -274,18 +280,16 @@ impl MapErrors {
         }
         p.state_cross -= update.gain * inn.s * k_b.transpose();
         p.covariance = symmetric(&(p.covariance - k_b * inn.s * k_b.transpose()));
-        self.correct(&(k_b * inn.y), map)
+        self.correct(&(k_b * inn.y))
     }
 
     /// Applies the estimate `δb` of the placement's error (true minus placed, as every
-    /// error here): the map moves rigidly from the pose it was placed from, `x_b`, to
-    /// `x_b + δb` (each wall's line by [`Line::from_frame`] of that motion, its end points
-    /// with it), and the walls' `G` are taken at the new placement. A wall whose line
-    /// comes out written the other way round (it passes near the origin) has its error
-    /// flipped with it. Fails, before moving anything, if the correction or the errors
-    /// are not finite (finite ones move a finite map to a finite one).
-    fn correct(&mut self, delta: &Vector3<f64>, map: &mut LineMap) -> Result<(), Error> {
-        let p = &self.placement;
+    /// error here): the map's placement moves from the pose it was placed from, `x_b`, to
+    /// `x_b + δb`; the walls follow it rigidly when [moved](Self::move_wall). Fails,
+    /// changing nothing, if the correction or the errors are not finite (finite ones move
+    /// a finite map to a finite one).
+    fn correct(&mut self, delta: &Vector3<f64>) -> Result<(), Error> {
+        let p = &mut self.placement;
         if !(all_finite(delta.as_slice())
             && all_finite(p.covariance.as_slice())
             && all_finite(p.state_cross.as_slice())
@@ -296,23 +300,41 @@ impl MapErrors {
             });
         }
         let old = p.pose;
-        let new = Pose2::new(old.x + delta.x, old.y + delta.y, old.theta + delta.z);
-        let motion = new.compose(&old.inverse());
-        self.placement.pose = new;
-        for (segment, wall) in map.segments.iter_mut().zip(&mut self.walls) {
-            let (start, end) = (
-                motion.transform_point(&segment.start),
-                motion.transform_point(&segment.end),
-            );
-            let line = segment.line.from_frame(&motion);
-            let turned = angle_diff(line.beta, segment.line.beta + delta.z);
-            if turned.abs() > core::f64::consts::FRAC_PI_2 {
-                *wall = wall.flipped();
-            }
-            wall.placement_jacobian = placement_jacobians(&line, &new, &self.mount).1;
-            (segment.start, segment.end, segment.line) = (start, end, line);
-        }
+        p.pose = Pose2::new(old.x + delta.x, old.y + delta.y, old.theta + delta.z);
         Ok(())
+    }
+
+    /// Moves wall `j` of `map` (its segment, line and `G`) rigidly from the placement it
+    /// was last moved to onto the current one: its line by [`Line::from_frame`] of that
+    /// motion, its end points with it, `G` taken at the new placement. A wall whose line
+    /// comes out written the other way round (it passes near the origin) has its error
+    /// flipped with it. Nothing to do for a wall already there.
+    pub(crate) fn move_wall(&mut self, j: usize, map: &mut LineMap) {
+        let new = self.placement.pose;
+        let (Some(wall), Some(segment)) = (self.walls.get_mut(j), map.segments.get_mut(j)) else {
+            return;
+        };
+        if wall.placed_from == new {
+            return;
+        }
+        let motion = new.compose(&wall.placed_from.inverse());
+        let line = segment.line.from_frame(&motion);
+        let turned = angle_diff(line.beta, segment.line.beta + motion.theta);
+        if turned.abs() > core::f64::consts::FRAC_PI_2 {
+            *wall = wall.flipped();
+        }
+        wall.placement_jacobian = placement_jacobians(&line, &new, &self.mount).1;
+        wall.placed_from = new;
+        segment.start = motion.transform_point(&segment.start);
+        segment.end = motion.transform_point(&segment.end);
+        segment.line = line;
+    }
+
+    /// [`move_wall`](Self::move_wall) for every wall: the map where the placement is.
+    pub(crate) fn move_walls(&mut self, map: &mut LineMap) {
+        for j in 0..self.walls.len() {
+            self.move_wall(j, map);
+        }
     }
 }
 
@@ -467,26 +489,76 @@ mod tests {
         let before = errors.walls[0];
         assert!(before.own[(0, 1)].abs() > 0.0);
         // Moved 4 mm down it is y = −0.002, written (0.002, −π/2): δρ changes sign.
-        errors
-            .correct(&Vector3::new(0.0, -0.004, 0.0), &mut map)
-            .unwrap();
+        errors.correct(&Vector3::new(0.0, -0.004, 0.0)).unwrap();
+        assert_eq!(errors.walls[0].own, before.own, "not moved yet");
+        errors.move_walls(&mut map);
         let wall = map.segments[0].line;
         assert!((wall.rho - 0.002).abs() < 1e-9);
         assert!((wall.beta + core::f64::consts::FRAC_PI_2).abs() < 1e-9);
         let t = Matrix2::new(-1.0, 0.0, 0.0, 1.0);
         assert_eq!(errors.walls[0].own, t * before.own * t);
         // And back: the first form and error again.
-        errors
-            .correct(&Vector3::new(0.0, 0.004, 0.0), &mut map)
-            .unwrap();
+        errors.correct(&Vector3::new(0.0, 0.004, 0.0)).unwrap();
+        errors.move_walls(&mut map);
         assert_eq!(errors.walls[0].own, before.own);
         assert!((map.segments[0].line.beta - core::f64::consts::FRAC_PI_2).abs() < 1e-9);
-        // A correction that is not finite moves nothing.
-        let kept = map.clone();
-        assert!(errors
-            .correct(&Vector3::new(f64::NAN, 0.0, 0.0), &mut map)
-            .is_err());
-        assert_eq!(map, kept);
+        // A correction that is not finite changes nothing.
+        let (kept_map, kept_errors) = (map.clone(), errors.clone());
+        assert!(errors.correct(&Vector3::new(f64::NAN, 0.0, 0.0)).is_err());
+        errors.move_walls(&mut map);
+        assert_eq!((&map, &errors), (&kept_map, &kept_errors));
+    }
+
+    #[test]
+    fn walls_moved_late_land_where_walls_moved_at_once_do() {
+        // The laser at the origin; the third wall passes 1 mm from it.
+        let (pose, mount) = (Pose2::identity(), Pose2::identity());
+        let lines = [
+            observed(2.0, 0.1),
+            observed(1.5, 1.7),
+            observed(0.001, -1.2),
+        ];
+        let mut at_once = LineMap::from_scan(&lines, &pose).unwrap();
+        let mut late = at_once.clone();
+        let p = Matrix3::from_diagonal_element(1e-4);
+        let mut errors = MapErrors::of_first_scan(&at_once, &lines, &[0, 1, 2], &pose, &p, &mount);
+        let mut late_errors = errors.clone();
+        let third = errors.walls[2].own;
+        // The first correction takes the third wall across the origin (its line is then
+        // written the other way round and its error flipped), the second does not.
+        let corrections = [
+            Vector3::new(-0.01, 0.02, 0.004),
+            Vector3::new(0.003, -0.005, -0.002),
+        ];
+        for (k, delta) in corrections.iter().enumerate() {
+            errors.correct(delta).unwrap();
+            errors.move_walls(&mut at_once);
+            late_errors.correct(delta).unwrap();
+            if k == 0 {
+                // Only the wall a line is about to be fused against.
+                late_errors.move_wall(1, &mut late);
+                assert_eq!(late.segments[1], at_once.segments[1]);
+                assert_eq!(late_errors.walls[1], errors.walls[1]);
+                assert_ne!(late.segments[0], at_once.segments[0]);
+            }
+        }
+        late_errors.move_walls(&mut late);
+        for (a, b) in late.segments.iter().zip(&at_once.segments) {
+            assert!((a.start - b.start).norm() < 1e-12 && (a.end - b.end).norm() < 1e-12);
+            assert!((a.line.rho - b.line.rho).abs() < 1e-12);
+            assert!(angle_diff(a.line.beta, b.line.beta).abs() < 1e-12);
+        }
+        for (a, b) in late_errors.walls.iter().zip(&errors.walls) {
+            assert_eq!(a.own, b.own, "flipped alike");
+            assert!((a.placement_jacobian - b.placement_jacobian).amax() < 1e-12);
+        }
+        assert_eq!(late_errors.placement, errors.placement);
+        let t = Matrix2::new(-1.0, 0.0, 0.0, 1.0);
+        assert_eq!(
+            errors.walls[2].own,
+            t * third * t,
+            "the third wall flipped once"
+        );
     }
 
     proptest! {

@@ -498,10 +498,13 @@ impl Localizer {
     }
 
     /// Step 3 of a scan update: fuses the matches in order, each re-linearised at the
-    /// current state and re-gated; counts and records what happened to each.
+    /// current state (and a first-scan map's wall moved to its current placement) and
+    /// re-gated; counts and records what happened to each. Then the rest of the map
+    /// follows the placement.
     fn fuse_matches(&mut self, report: &mut ScanReport) -> Result<(), ekf_core::Error> {
         for i in 0..self.matches.matches().len() {
             let m = self.matches.matches()[i];
+            self.map_errors.move_wall(m.map, &mut self.map);
             let (Some(line), Some(wall)) =
                 (self.lines.get(m.observed), self.map.segments.get(m.map))
             else {
@@ -526,6 +529,7 @@ impl Localizer {
                 accepted: outcome.accepted,
             });
         }
+        self.map_errors.move_walls(&mut self.map);
         Ok(())
     }
 
@@ -547,8 +551,7 @@ impl Localizer {
             return self.ekf.update(model, gate);
         };
         let update = self.ekf.update_considering(model, &considered, gate)?;
-        self.map_errors
-            .line_fused(wall, &considered, &update, &mut self.map)?;
+        self.map_errors.line_fused(wall, &considered, &update)?;
         Ok(update.outcome)
     }
 
