@@ -200,19 +200,25 @@ fn live_against_the_emulated_robot_replays_bit_for_bit_and_tracks_the_truth() {
     assert!(report.ape.matched_poses > 600, "{:?}", report.ape);
     assert!(report.ape.translation_m.rmse <= 0.02, "{:?}", report.ape);
 
-    // The poses it printed as it ran: one per wheel reading, predicted from the fused
-    // state (held back ~0.3 s for the laser) through the wheel readings since, and as
-    // accurate at their own time as the fused ones.
+    // The poses it printed as it ran: at most one per wheel reading, later each than the
+    // one before, predicted from the fused state (held back ~0.3 s for the laser) through
+    // the wheel readings since, and as accurate at their own time as the fused ones.
     let printed: Vec<serde_json::Value> = live_out
         .lines()
         .filter(|l| l.contains("\"theta\""))
         .map(|l| serde_json::from_str(l).unwrap())
         .collect();
-    let mut leads: Vec<u64> = Vec::new();
+    let wheel_stamps = stamps(&recording, "/joint_states");
+    assert!(printed.len() <= wheel_stamps.len());
+    let (mut leads, mut previous): (Vec<u64>, u64) = (Vec::new(), 0);
     let (mut sq, mut n) = (0.0, 0usize);
     for p in &printed {
         let (t, fused) = (p["t_ns"].as_u64().unwrap(), p["fused_ns"].as_u64().unwrap());
-        assert!(fused <= t, "{p}");
+        // A fused motion step first: no pose from before the recording's first wheel
+        // reading, and none more than a second behind.
+        assert!(fused >= wheel_stamps[0] && t > previous, "{p}");
+        assert!(t - fused < 1_000_000_000, "{p}");
+        previous = t;
         leads.push(t - fused);
         // Before the robot moves off, the truth has not started.
         if let Some(truth) = truth_at(&truth, t) {

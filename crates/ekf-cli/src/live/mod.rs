@@ -11,7 +11,7 @@ use crate::config::{Config, MotionSource};
 use crate::devices::modbus_base::{BaseConfig, EncoderTracker};
 use crate::devices::sick::{BaudRate, SickConfig, Variant};
 use crate::devices::DeviceError;
-use crate::replay::{Mode, Preamble, ReplayError, ReplayOptions, ReplaySummary, Run};
+use crate::replay::{Forecast, Mode, Preamble, ReplayError, ReplayOptions, ReplaySummary, Run};
 use crate::ros2::builtin_interfaces::Time;
 use crate::ros2::diagnostic_msgs::{DiagnosticArray, DiagnosticStatus, KeyValue};
 use crate::ros2::std_msgs::Header;
@@ -51,12 +51,14 @@ pub struct LiveOptions {
 /// What the run reports as it goes.
 #[derive(Debug, Clone, PartialEq)]
 pub enum LiveEvent {
-    /// The estimate at the newest wheel reading, one per reading as it arrives: the fused
-    /// state predicted through the wheel readings still held back (measurements made
-    /// before them may still be arriving; see [`run`]), as robot_localization's
+    /// The estimate now, reported as wheel readings arrive (at most one per reading, each
+    /// later than the one before, none until a first motion step has been fused): the
+    /// fused state predicted through the wheel readings still held back (measurements
+    /// made before them may still be arriving; see [`run`]), as robot_localization's
     /// `predict_to_current_time` does. The recording keeps the fused estimates.
     Pose {
-        /// Time (ns since the Unix epoch): when the newest wheel reading was made.
+        /// Time (ns since the Unix epoch): when the newest wheel reading held back was
+        /// made, or the fused state's time if none is.
         t_ns: u64,
         /// Time of the fused state it was predicted from (ns since the Unix epoch).
         fused_ns: u64,
@@ -65,9 +67,10 @@ pub enum LiveEvent {
         /// Its covariance.
         covariance: Matrix3<f64>,
     },
-    /// A device connected, failed or came back.
+    /// A device connected, failed or came back; or (`filter`) a pose could not be
+    /// predicted ahead.
     Device {
-        /// `laser`, `base` or `gps`.
+        /// `laser`, `base`, `gps` or `filter`.
         device: &'static str,
         /// 0 OK, 1 warning.
         level: u8,
@@ -340,8 +343,8 @@ pub fn run(
                     Ok(())
                 }
                 Reading::Data { at, data } => {
-                    wheels_moved |= matches!(data, Data::Base { .. });
-                    live.hold_back(at, data);
+                    let wheels = matches!(data, Data::Base { .. });
+                    wheels_moved |= live.hold_back(at, data) && wheels;
                     Ok(())
                 }
             };
@@ -358,7 +361,7 @@ pub fn run(
             }
         }
         if step.is_ok() && wheels_moved {
-            step = live.forecast().map(&mut *on_event);
+            live.report_pose(on_event);
         }
         if let Err(e) = step {
             failure = Some(e);
@@ -374,8 +377,8 @@ pub fn run(
     }
     shutdown(threads);
     // What was still held back.
-    match live.release(None).and_then(|()| live.forecast()) {
-        Ok(pose) => on_event(pose),
+    match live.release(None) {
+        Ok(()) => live.report_pose(on_event),
         Err(e) => {
             failure.get_or_insert(e);
         }
@@ -405,6 +408,8 @@ struct Live<'a> {
     hold: Duration,
     /// Stamp of the last message fused (at first the recording's start).
     last_ns: u64,
+    /// Time of the last pose reported (0: none yet).
+    reported_ns: u64,
 }
 
 impl<'a> Live<'a> {
@@ -471,6 +476,7 @@ impl<'a> Live<'a> {
             arrived: 0,
             hold: HOLD_SLACK,
             last_ns: t0,
+            reported_ns: 0,
         })
     }
 
@@ -485,14 +491,16 @@ impl<'a> Live<'a> {
 
     /// Holds a measurement made at `at` back until those made before it have arrived;
     /// one made before a measurement already fused is late: counted and dropped (fusing
-    /// or recording it out of order would make the replay differ).
-    fn hold_back(&mut self, at: Instant, data: Data) {
+    /// or recording it out of order would make the replay differ). Returns whether it
+    /// was kept.
+    fn hold_back(&mut self, at: Instant, data: Data) -> bool {
         if self.clock.stamp(at) < self.last_ns {
             self.summary.late_readings += 1;
-            return;
+            return false;
         }
         self.pending.insert((at, self.arrived), data);
         self.arrived += 1;
+        true
     }
 
     /// Fuses the held measurements made up to `until` (all with `None`), oldest first.
@@ -515,9 +523,33 @@ impl<'a> Live<'a> {
         self.last_ns
     }
 
+    /// Reports the pose now ([`forecast`](Self::forecast)) if it is later than the last
+    /// one reported. A prediction that fails is reported as a warning, not as the run's
+    /// failure: fusing the same readings will tell whether the filter itself failed.
+    fn report_pose(&mut self, on_event: &mut dyn FnMut(LiveEvent)) {
+        match self.forecast() {
+            Ok(Some(f)) if f.t_ns > self.reported_ns => {
+                self.reported_ns = f.t_ns;
+                on_event(LiveEvent::Pose {
+                    t_ns: f.t_ns,
+                    fused_ns: f.fused_ns,
+                    pose: f.pose,
+                    covariance: f.covariance,
+                });
+            }
+            Ok(_) => {}
+            Err(e) => on_event(LiveEvent::Device {
+                device: "filter",
+                level: 1,
+                text: format!("the pose could not be predicted ahead: {e}"),
+            }),
+        }
+    }
+
     /// The pose now: the fused state predicted through the wheel readings held back
-    /// ([`Run::forecast`]), each turned into the joint state fusing it will record.
-    fn forecast(&self) -> Result<LiveEvent, LiveError> {
+    /// ([`Run::forecast`]), each turned into the joint state fusing it will record (but
+    /// for the nanosecond its stamp may be moved by to keep stamps apart).
+    fn forecast(&self) -> Result<Option<Forecast>, LiveError> {
         let (mut tracker, mut connection) = (self.tracker.clone(), self.base_connection);
         let joint_states: Vec<_> = self
             .pending
@@ -539,13 +571,7 @@ impl<'a> Live<'a> {
                 Some(messages::joint_state(self.config, t, ticks))
             })
             .collect();
-        let f = self.run.forecast(&joint_states)?;
-        Ok(LiveEvent::Pose {
-            t_ns: f.t_ns,
-            fused_ns: f.fused_ns,
-            pose: f.pose,
-            covariance: f.covariance,
-        })
+        Ok(self.run.forecast(&joint_states)?)
     }
 
     fn reading(&mut self, at: Instant, data: Data) -> Result<(), LiveError> {

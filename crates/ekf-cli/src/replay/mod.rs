@@ -774,15 +774,18 @@ impl<'a> Run<'a> {
     /// The state predicted through wheel readings that have not been fused yet
     /// (`joint_states`, oldest first, each following the last one fused): where the robot
     /// is at the newest of them, while measurements made before it may still be on their
-    /// way (`ekf live` holds readings back until then). Each reading is predicted exactly
-    /// as fusing it would (paper eqs. 5–9, from the same encoder increments); the filter
-    /// is left as it is. Readings this run would skip are skipped; with odometry as the
+    /// way (`ekf live` holds readings back until then). Each reading is predicted as
+    /// fusing it would (paper eqs. 5–9, from the same encoder increments); the filter is
+    /// left as it is. Readings this run would skip are skipped; with odometry as the
     /// motion source, or nothing to predict from, it is the fused state at its own time.
+    /// `None` until a motion step has been fused: before that the state has no time.
     pub(crate) fn forecast<'m>(
         &self,
         joint_states: impl IntoIterator<Item = &'m JointState>,
-    ) -> Result<Forecast, ReplayError> {
-        let fused_ns = self.clock.state_ns.unwrap_or(self.start_ns);
+    ) -> Result<Option<Forecast>, ReplayError> {
+        let Some(fused_ns) = self.clock.state_ns else {
+            return Ok(None);
+        };
         let mut ekf = *self.localizer.ekf();
         let (mut clock, mut wheels) = (self.clock, self.wheels.clone());
         let config = self.localizer.config();
@@ -803,12 +806,12 @@ impl<'a> Run<'a> {
             }
             t_ns = t_ns.max(stamp);
         }
-        Ok(Forecast {
+        Ok(Some(Forecast {
             t_ns,
             fused_ns,
             pose: ekf.pose(),
             covariance: *ekf.covariance(),
-        })
+        }))
     }
 
     /// Brings the state to `t_ns` at the last motion rate before a scan or heading is
@@ -1069,6 +1072,7 @@ mod tests {
         let bearing = std::f64::consts::FRAC_PI_2 - 0.02;
         let heading = messages::compass(&config, 1_150_000_000, bearing);
         let (topic, compass) = (&config.topics.joint_states, &config.topics.compass);
+        assert_eq!(fused.forecast(&joints).unwrap(), None, "nothing fused yet");
         for run in [&mut fused, &mut all] {
             feed(run, &mut recorder, topic, &joints[0]);
             feed(run, &mut recorder, topic, &joints[1]);
@@ -1079,7 +1083,7 @@ mod tests {
         }
         assert_eq!(fused.summary.compass.accepted, 1);
         let before = *fused.localizer.ekf();
-        let forecast = fused.forecast(&joints[2..]).unwrap();
+        let forecast = fused.forecast(&joints[2..]).unwrap().unwrap();
 
         assert_eq!(
             *fused.localizer.ekf(),
@@ -1095,7 +1099,7 @@ mod tests {
             "it turned"
         );
         // Nothing held back: the fused state at its own time.
-        let now = fused.forecast(&[]).unwrap();
+        let now = fused.forecast(&[]).unwrap().unwrap();
         assert_eq!((now.t_ns, now.pose), (1_150_000_000, before.pose()));
     }
 }

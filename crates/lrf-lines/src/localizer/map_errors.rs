@@ -5,9 +5,10 @@
 //! at the placement (a line seen from a known pose gives the map line back). The two
 //! parts are treated differently:
 //! - the placement error `b = δx_b`, shared by every wall (the whole map is shifted and
-//!   turned with it), is **estimated**: its estimate is applied to the map at once, moving
-//!   it rigidly, so what is carried is its covariance `P_bb` and its correlation `P_xb`
-//!   with the state. At the placement the state's error is `b` itself
+//!   turned with it), is **estimated**: its estimate is applied to the map, moving it
+//!   rigidly (a wall when a line is fused against it, all of them once a scan's lines or
+//!   a state measurement are fused), so what is carried is its covariance `P_bb` and its
+//!   correlation `P_xb` with the state. At the placement the state's error is `b` itself
 //!   (`P_xb = P_bb = P`). A compass, which measures the heading in its own frame, thus
 //!   turns the map into that frame as the run goes on; a position fix shifts it;
 //! - each wall's fit error `f_j = F δz_j`, covariance `C_j = F R_j Fᵀ`, is **considered**
@@ -286,8 +287,8 @@ impl MapErrors {
     /// Applies the estimate `δb` of the placement's error (true minus placed, as every
     /// error here): the map's placement moves from the pose it was placed from, `x_b`, to
     /// `x_b + δb`; the walls follow it rigidly when [moved](Self::move_wall). Fails,
-    /// changing nothing, if the correction or the errors are not finite (finite ones move
-    /// a finite map to a finite one).
+    /// changing nothing, if the correction, the errors or the new placement are not
+    /// finite (a finite placement moves a finite map to a finite one).
     fn correct(&mut self, delta: &Vector3<f64>) -> Result<(), Error> {
         let p = &mut self.placement;
         if !(all_finite(delta.as_slice())
@@ -300,7 +301,8 @@ impl MapErrors {
             });
         }
         let old = p.pose;
-        p.pose = Pose2::new(old.x + delta.x, old.y + delta.y, old.theta + delta.z);
+        let new = Pose2::new(old.x + delta.x, old.y + delta.y, old.theta + delta.z);
+        p.pose = new.validated("first-scan map placement")?;
         Ok(())
     }
 
@@ -559,6 +561,89 @@ mod tests {
             t * third * t,
             "the third wall flipped once"
         );
+    }
+
+    #[test]
+    fn walls_moved_late_through_line_fusions_carry_the_same_errors() {
+        // Five lines fused against a three-wall map, seen from (3 cm, −2 cm, 0.01 rad)
+        // while the map was placed from the origin: once moving every wall after each
+        // line, once moving only the wall about to be used and the rest at the end.
+        let (pose, mount) = (Pose2::identity(), Pose2::new(-0.1, 0.0, 0.0));
+        let lines = [observed(2.0, 0.1), observed(1.5, 1.7), observed(1.2, -1.1)];
+        let map = LineMap::from_scan(&lines, &pose.compose(&mount)).unwrap();
+        let p = Matrix3::new(4e-4, 1e-5, 2e-5, 1e-5, 3e-4, -1e-5, 2e-5, -1e-5, 1e-4);
+        let errors = MapErrors::of_first_scan(&map, &lines, &[0, 1, 2], &pose, &p, &mount);
+        let filter = ekf_core::Ekf::new(pose, p).unwrap();
+        let (mut at_once, mut late) =
+            ((map.clone(), errors.clone(), filter), (map, errors, filter));
+        let truth = Pose2::new(0.03, -0.02, 0.01);
+        let noise = Matrix3::from_diagonal(&Vector3::new(4e-4, 4e-4, 1e-4));
+        // A position fix at the truth after the second line: the placement takes its
+        // share, so the map moves (all of it at once, in both).
+        let fix = ekf_core::Position::new(0.03, -0.02, Matrix2::identity() * 1e-4).unwrap();
+        for (k, j) in [1, 0, 1, 0, 2].into_iter().enumerate() {
+            for (moved_late, (map, errors, filter)) in [(false, &mut at_once), (true, &mut late)] {
+                if k == 2 {
+                    let update = filter
+                        .update_considering(&fix, &ekf_core::Considered::none(), None)
+                        .unwrap();
+                    errors
+                        .state_measured(&update.innovation, &update.outcome, map)
+                        .unwrap();
+                }
+                filter.add_process_noise(&noise).unwrap();
+                if moved_late {
+                    errors.move_wall(j, map);
+                }
+                let wall = map.segments[j].line;
+                let model = LaserLine {
+                    observed: wall.to_frame(&truth.compose(&mount)),
+                    covariance: Matrix2::new(1e-4, 0.0, 0.0, 1e-5),
+                    map_line: wall,
+                    mount,
+                };
+                let considered = errors.considered(j, &wall, &mount, &filter.pose()).unwrap();
+                let update = filter
+                    .update_considering(&model, &considered, None)
+                    .unwrap();
+                errors.line_fused(j, &considered, &update).unwrap();
+                if !moved_late {
+                    errors.move_walls(map);
+                }
+            }
+        }
+        late.1.move_walls(&mut late.0);
+        let ((map_a, errors_a, filter_a), (map_l, errors_l, filter_l)) = (&at_once, &late);
+        assert!((filter_a.state() - filter_l.state()).amax() < 1e-12);
+        assert!((filter_a.covariance() - filter_l.covariance()).amax() < 1e-15);
+        for (a, b) in errors_l.walls.iter().zip(&errors_a.walls) {
+            assert!(
+                a.cross.amax() > 1e-8,
+                "the fusions correlated the walls with the state"
+            );
+            assert!((a.cross - b.cross).amax() < 1e-15);
+            assert!((a.placement_cross - b.placement_cross).amax() < 1e-15);
+            assert!((a.placement_jacobian - b.placement_jacobian).amax() < 1e-12);
+        }
+        // Both maps are the first scan placed afresh from the corrected placement.
+        let placement = errors_a.placement.pose;
+        assert!(
+            placement.to_vector().amax() > 1e-3,
+            "the placement moved: {placement:?}"
+        );
+        let fresh = LineMap::from_scan(&lines, &placement.compose(&mount)).unwrap();
+        for ((a, l), f) in map_a
+            .segments
+            .iter()
+            .zip(&map_l.segments)
+            .zip(&fresh.segments)
+        {
+            for m in [a, l] {
+                assert!((m.line.rho - f.line.rho).abs() < 1e-12);
+                assert!(angle_diff(m.line.beta, f.line.beta).abs() < 1e-12);
+                assert!((m.start - f.start).norm() < 1e-12 && (m.end - f.end).norm() < 1e-12);
+            }
+        }
     }
 
     proptest! {
