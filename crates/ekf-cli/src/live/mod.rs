@@ -191,7 +191,7 @@ fn variant(config: &Config) -> Result<Variant, LiveError> {
 /// Readings are fused in the order they were made, once none made before them can still
 /// arrive: the laser's stamp is the middle of its sweep, a few hundred milliseconds
 /// before its telegram is through the serial line. The poses reported are not that late:
-/// each wheel reading, as it arrives, predicts the fused state ahead through the wheel
+/// as wheel readings arrive, the fused state is predicted ahead through the wheel
 /// readings held back ([`LiveEvent::Pose`]).
 pub fn run(
     config: &Config,

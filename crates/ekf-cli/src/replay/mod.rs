@@ -496,7 +496,8 @@ impl MotionClock {
 /// The filter's state predicted ahead of what has been fused: see [`Run::forecast`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct Forecast {
-    /// The time it refers to (ns): the newest wheel reading's stamp.
+    /// The time it refers to (ns): the newest wheel reading predicted through, or
+    /// `fused_ns` if none was.
     pub t_ns: u64,
     /// The time of the fused state it was predicted from (ns).
     pub fused_ns: u64,
