@@ -8,7 +8,7 @@ pub mod messages;
 mod workers;
 
 use crate::config::{Config, MotionSource};
-use crate::devices::modbus_base::{BaseConfig, EncoderTracker};
+use crate::devices::modbus_base::{BaseConfig, BaseReading, EncoderTracker, WheelTicks};
 use crate::devices::sick::{BaudRate, SickConfig, Variant};
 use crate::devices::DeviceError;
 use crate::replay::{Forecast, Mode, Preamble, ReplayError, ReplayOptions, ReplaySummary, Run};
@@ -387,15 +387,35 @@ pub fn run(
     live.finish(started, failure)
 }
 
+/// The wheel positions from the base controller's reads, across reconnections.
+#[derive(Debug, Clone)]
+struct BaseTicks {
+    tracker: EncoderTracker,
+    /// The base worker's connection the tracker follows.
+    connection: u64,
+}
+
+impl BaseTicks {
+    /// The wheel positions after `reading`, made at `t_ns` and received on the base
+    /// worker's connection `connection` ([`EncoderTracker::update`]). A new connection
+    /// may be a power-cycled controller, whose counts and counter restart at 0: its
+    /// first read is a new reference.
+    fn update(&mut self, reading: BaseReading, connection: u64, t_ns: u64) -> Option<WheelTicks> {
+        if connection != self.connection {
+            self.tracker.restart();
+            self.connection = connection;
+        }
+        self.tracker.update(reading, t_ns)
+    }
+}
+
 /// The main loop's state.
 struct Live<'a> {
     config: &'a Config,
     run: Run<'a>,
     recorder: Recorder,
     clock: Clock,
-    tracker: EncoderTracker,
-    /// The base worker's connection the tracker follows.
-    base_connection: u64,
+    base: BaseTicks,
     variant: Variant,
     counters: BTreeMap<&'static str, DeviceCounters>,
     summary: LiveSummary,
@@ -454,10 +474,12 @@ impl<'a> Live<'a> {
             run,
             recorder,
             clock,
-            tracker: EncoderTracker::new(
-                config.devices.max_wheel_turns_per_s * config.devices.ticks_per_revolution,
-            ),
-            base_connection: 0,
+            base: BaseTicks {
+                tracker: EncoderTracker::new(
+                    config.devices.max_wheel_turns_per_s * config.devices.ticks_per_revolution,
+                ),
+                connection: 0,
+            },
             variant,
             counters: BTreeMap::new(),
             summary: LiveSummary {
@@ -550,24 +572,20 @@ impl<'a> Live<'a> {
     /// ([`Run::forecast`]), each turned into the joint state fusing it will record (but
     /// for the nanosecond its stamp may be moved by to keep stamps apart).
     fn forecast(&self) -> Result<Option<Forecast>, LiveError> {
-        let (mut tracker, mut connection) = (self.tracker.clone(), self.base_connection);
+        let mut base = self.base.clone();
         let joint_states: Vec<_> = self
             .pending
             .iter()
             .filter_map(|(&(at, _), data)| {
                 let Data::Base {
                     reading,
-                    connection: c,
+                    connection,
                 } = data
                 else {
                     return None;
                 };
-                if *c != connection {
-                    tracker.restart();
-                    connection = *c;
-                }
                 let t = self.clock.stamp(at);
-                let ticks = tracker.update(*reading, t)?;
+                let ticks = base.update(*reading, *connection, t)?;
                 Some(messages::joint_state(self.config, t, ticks))
             })
             .collect();
@@ -586,12 +604,7 @@ impl<'a> Live<'a> {
                 reading: r,
                 connection,
             } => {
-                if connection != self.base_connection {
-                    // A power-cycled controller restarts its counts and counter at 0.
-                    self.tracker.restart();
-                    self.base_connection = connection;
-                }
-                let Some(ticks) = self.tracker.update(r, self.clock.stamp(at)) else {
+                let Some(ticks) = self.base.update(r, connection, self.clock.stamp(at)) else {
                     return Ok(());
                 };
                 let t = self.stamp(at);
@@ -633,9 +646,9 @@ impl<'a> Live<'a> {
 
     /// Every device's counters as one diagnostics message.
     fn counters_diagnostics(&mut self) -> Result<(), LiveError> {
-        self.summary.base_repeated_samples = self.tracker.repeated;
-        self.summary.base_missed_samples = self.tracker.missed;
-        self.summary.base_implausible_samples = self.tracker.implausible;
+        self.summary.base_repeated_samples = self.base.tracker.repeated;
+        self.summary.base_missed_samples = self.base.tracker.missed;
+        self.summary.base_implausible_samples = self.base.tracker.implausible;
         let statuses = self
             .counters
             .iter()
@@ -680,9 +693,9 @@ impl<'a> Live<'a> {
         started: Instant,
         failure: Option<LiveError>,
     ) -> Result<LiveOutcome, LiveError> {
-        self.summary.base_repeated_samples = self.tracker.repeated;
-        self.summary.base_missed_samples = self.tracker.missed;
-        self.summary.base_implausible_samples = self.tracker.implausible;
+        self.summary.base_repeated_samples = self.base.tracker.repeated;
+        self.summary.base_missed_samples = self.base.tracker.missed;
+        self.summary.base_implausible_samples = self.base.tracker.implausible;
         let outcome = self.run.finish(started, None)?;
         self.summary.filter = outcome.summary;
         self.summary.devices = self

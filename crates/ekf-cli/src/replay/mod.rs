@@ -440,6 +440,13 @@ enum MotionStep {
 }
 
 impl MotionStep {
+    /// Wheel speeds over the interval `(t0, t1]` that ends at `stamp` (a joint state's)
+    /// and lasts the speeds' `dt`: `(step, t0, t1)`.
+    fn wheels_until(speeds: WheelSpeeds<f64>, stamp: u64) -> (Self, u64, u64) {
+        let t0 = stamp - (speeds.dt * 1e9).round() as u64;
+        (MotionStep::Wheels(speeds), t0, stamp)
+    }
+
     /// The part of the step after a fraction `1 − f` of its interval has passed.
     fn part(self, f: f64) -> Self {
         match self {
@@ -731,13 +738,7 @@ impl<'a> Run<'a> {
                             right: self.config.motion.right_joint.clone(),
                             names,
                         })?;
-                speeds.map(|s| {
-                    (
-                        MotionStep::Wheels(s),
-                        stamp - (s.dt * 1e9).round() as u64,
-                        stamp,
-                    )
-                })
+                speeds.map(|s| MotionStep::wheels_until(s, stamp))
             }
             AnyMessage::Odometry(o) => {
                 let stamp = o.header.stamp.to_nanos().filter(|&s| s > 0).unwrap_or(now);
@@ -798,10 +799,8 @@ impl<'a> Run<'a> {
             let Ok(Ok(speeds)) = wheels.speeds(stamp, js) else {
                 continue;
             };
-            let t0 = stamp - (speeds.dt * 1e9).round() as u64;
-            if let Some(MotionStep::Wheels(s)) =
-                clock.advance(MotionStep::Wheels(speeds), t0, stamp)
-            {
+            let (step, t0, t1) = MotionStep::wheels_until(speeds, stamp);
+            if let Some(MotionStep::Wheels(s)) = clock.advance(step, t0, t1) {
                 ekf.predict_wheels(&config.robot, &s, &config.wheel_noise)
                     .map_err(LocalizerError::Filter)?;
             }

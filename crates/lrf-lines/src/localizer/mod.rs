@@ -336,8 +336,7 @@ impl Localizer {
     }
 
     /// Ends a compass lock-out with `compass`, whose innovation `ν` (given as `ν²`) the
-    /// filter expected
-    /// within `S = P_θθ + σ²`. The run of readings shows the heading further off than the
+    /// filter expected within `S = P_θθ + σ²`. The run of readings shows the heading further off than the
     /// filter allows, by an error the filter did not model, of variance
     /// `q = max(0, ν² − S)` (which makes the heading's NIS at most 1). Nothing says how
     /// the rest of the state moved with it but the filter's own correlations, so the
@@ -402,9 +401,6 @@ impl Localizer {
         measurement: &impl Measurement<f64, M>,
         gate: Option<&ChiSquareGate<f64>>,
     ) -> Result<UpdateOutcome<f64>, ekf_core::Error> {
-        if self.map_errors.is_empty() {
-            return self.ekf.update(measurement, gate);
-        }
         let update = self
             .ekf
             .update_considering(measurement, &Considered::none(), gate)?;
