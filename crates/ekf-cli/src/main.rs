@@ -4,10 +4,12 @@
 
 use clap::ValueEnum;
 use clap::{Parser, Subcommand};
-use ekf_cli::commands::{compare, emulate, evaluate, experiment, import, map, simulate};
+use ekf_cli::commands::{
+    self, compare, corpus, emulate, evaluate, experiment, import, map, simulate,
+};
 use ekf_cli::config::{Config, DEFAULT_TOML};
 use ekf_cli::emulate::Device;
-use ekf_cli::import::{CarmenFlavour, CarmenOptions, SyntheticCompass};
+use ekf_cli::import::{CarmenFlavour, CarmenOptions, RangeMaxSource, SyntheticCompass};
 use ekf_cli::live;
 use ekf_cli::replay::{self, Mode, ReplayOptions};
 use std::io::IsTerminal;
@@ -205,6 +207,23 @@ enum Command {
         #[command(subcommand)]
         format: ImportFormat,
     },
+    /// The real-log benchmark: import each CARMEN log (a file, or every *.log / *.log.gz
+    /// in a folder), build its map from the reference, replay it laser-only from the first
+    /// reference pose, and print one row per log.
+    Corpus {
+        /// CARMEN logs, or folders of them.
+        #[arg(required = true)]
+        paths: Vec<PathBuf>,
+        /// Where the imported bags, maps and TUM trajectories go.
+        #[arg(long, default_value = "out/corpus")]
+        work_dir: PathBuf,
+        /// Filter settings (TOML); default: the documented defaults.
+        #[arg(long)]
+        config: Option<PathBuf>,
+        /// Print the rows as JSON instead of a table.
+        #[arg(long)]
+        json: bool,
+    },
     /// Absolute and relative pose errors of a trajectory against a reference, as `evo`
     /// computes them (same frame, no alignment unless --align).
     Evaluate {
@@ -253,6 +272,10 @@ enum ImportFormat {
         /// Seed of the synthetic compass noise.
         #[arg(long, default_value_t = 1)]
         seed: u64,
+        /// Refuse a log whose timestamps need repair (negative, zero, below a nanosecond,
+        /// out of order, or a clock broken throughout) instead of repairing them.
+        #[arg(long)]
+        strict: bool,
         /// Print the summary as JSON.
         #[arg(long)]
         json: bool,
@@ -386,7 +409,7 @@ fn print_replay_table(s: &replay::ReplaySummary) {
         );
     }
     if let Some(a) = &s.accuracy {
-        println!("  accuracy vs reference ({} poses): position RMSE {:.3} m (max {:.3} m), heading RMSE {:.2}°", a.matched_poses, a.position_rmse_m, a.position_max_m, a.heading_rmse_deg);
+        println!("  accuracy vs reference ({} poses): position RMSE {:.3} m (median {:.3}, p95 {:.3}, max {:.3} m; over 1 m on {:.1} %), heading RMSE {:.2}°", a.matched_poses, a.position_rmse_m, a.position_median_m, a.position_p95_m, a.position_max_m, 100.0 * a.share_over_1m, a.heading_rmse_deg);
     }
     let t = &s.timings;
     println!("  per scan (median/p99 µs): extraction {:.1}/{:.1}, matching {:.1}/{:.1}, update {:.1}/{:.1}", t.extraction.median_us, t.extraction.p99_us, t.matching.median_us, t.matching.p99_us, t.update.median_us, t.update.p99_us);
@@ -425,6 +448,20 @@ fn print_import(
             s.compass,
             s.span_ns() as f64 * 1e-9
         );
+        if let Some(r) = s.laser_range_max {
+            let source = match r.source {
+                RangeMaxSource::Saturation => "where the readings saturate",
+                RangeMaxSource::Param => "the log's PARAM robot_front_laser_max",
+                RangeMaxSource::Default => "--laser-max-range",
+            };
+            println!(
+                "  laser readings from {:.2} m up are no return ({source})",
+                r.value
+            );
+        }
+        for line in import::repair_lines(s) {
+            eprintln!("warning: {line}");
+        }
     }
     Ok(())
 }
@@ -777,6 +814,7 @@ fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
                     laser_max_range,
                     synthetic_compass_deg,
                     seed,
+                    strict,
                     json,
                 },
         } => {
@@ -791,6 +829,7 @@ fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
                 flavour,
                 laser_max_range,
                 synthetic_compass,
+                strict,
             };
             create_parent(&out)?;
             let summary = import::import_log(&input, &out, import::LogFormat::Carmen(options))?;
@@ -802,6 +841,43 @@ fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
             create_parent(&out)?;
             let summary = import::import_log(&input, &out, import::LogFormat::Mrpt)?;
             print_import(&summary, &out, json)?;
+        }
+        Command::Corpus {
+            paths,
+            work_dir,
+            config,
+            json,
+        } => {
+            let config = load_config(config.as_deref())?;
+            commands::create_output_dir(&work_dir)
+                .map_err(|e| format!("{}: {e}", work_dir.display()))?;
+            let mut logs = Vec::new();
+            for path in &paths {
+                if path.is_dir() {
+                    logs.extend(
+                        corpus::corpus_logs(path)
+                            .map_err(|e| format!("{}: {e}", path.display()))?,
+                    );
+                } else {
+                    logs.push(path.clone());
+                }
+            }
+            let mut rows = Vec::new();
+            for log in &logs {
+                let row = corpus::run_log(log, &config, &work_dir);
+                if !json {
+                    eprintln!("{}: {:.1} s", row.log, row.wall_time_s);
+                }
+                rows.push(row);
+            }
+            if json {
+                println!("{}", serde_json::to_string_pretty(&rows)?);
+            } else {
+                print!("{}", corpus::table(&rows));
+            }
+            if rows.iter().any(|r| r.error.is_some()) {
+                return Err("some logs could not be run (see the table)".into());
+            }
         }
         Command::Evaluate {
             estimate,

@@ -77,15 +77,42 @@ fn nan_and_infinity_are_rejected() {
 
 #[test]
 fn bad_timestamp_and_count_are_named() {
-    let (_, e) = carmen_until_error(b"ODOM 1 2 3 0 0 0 -4 h 1\n");
+    let (_, e) = carmen_until_error(b"ODOM 1 2 3 0 0 0 4s h 1\n");
     assert_eq!(
         e,
-        "line 1: ODOM field 8 (timestamp): expected a non-negative time in seconds, found '-4'"
+        "line 1: ODOM field 8 (timestamp): expected a time in seconds, found '4s'"
     );
     let (_, e) = carmen_until_error(b"FLASER -3 0 0 0\n");
     assert_eq!(
         e,
         "line 1: FLASER field 2 (num_readings): expected a non-negative integer, found '-3'"
+    );
+}
+
+#[test]
+fn a_negative_stamp_is_repaired_or_refused_with_strict() {
+    let text = "ODOM 0 0 0 0 0 0 1 h 1\nODOM 1 0 0 0 0 0 -4 h 1\nODOM 2 0 0 0 0 0 3 h 3\n";
+    let mut reader = read_carmen(text.as_bytes(), CarmenOptions::default());
+    let times: Vec<u64> = reader.by_ref().map(|r| r.unwrap().t_ns()).collect();
+    assert_eq!(times, [1_000_000_000, 2_000_000_000, 3_000_000_000]);
+    let repairs = &reader.stats().time_repairs;
+    assert_eq!(
+        (
+            repairs.negative.count,
+            repairs.negative.first_lines.as_slice()
+        ),
+        (1, &[2][..])
+    );
+    let strict = CarmenOptions {
+        strict: true,
+        ..CarmenOptions::default()
+    };
+    let e = read_carmen(text.as_bytes(), strict)
+        .find_map(Result::err)
+        .expect("strict refuses it");
+    assert_eq!(
+        e.to_string(),
+        "line 2: ODOM field 8 (timestamp): the time is negative (--strict refuses repairing it)"
     );
 }
 

@@ -3,8 +3,8 @@
 mod import_common;
 
 use ekf_cli::import::{
-    read_carmen, read_mrpt, CarmenFlavour, CarmenOptions, ImportRecord, ImportStats, Scan,
-    SyntheticCompass,
+    read_carmen, read_mrpt, CarmenFlavour, CarmenOptions, ImportRecord, ImportStats, RangeMax,
+    RangeMaxSource, RepairCount, Scan, SyntheticCompass, TimeRepairs,
 };
 use import_common::{assert_pose, kind};
 use std::f64::consts::{FRAC_PI_2, FRAC_PI_4, PI};
@@ -89,6 +89,12 @@ fn corrected_carmen_rechains_odometry_and_yields_references() {
             t_min_ns: Some(1_000_000_000),
             t_max_ns: Some(5_125_000_000),
             backwards_time: 0,
+            time_repairs: TimeRepairs::default(),
+            duplicates: RepairCount::default(),
+            laser_range_max: Some(RangeMax {
+                value: 4.0,
+                source: RangeMaxSource::Param,
+            }),
             comment_lines: 1,
             param_lines: 1,
             neff_lines: 2,
@@ -119,7 +125,8 @@ fn plain_flavour_keeps_odom_poses_as_written() {
         kinds,
         ["odom", "odom", "scan", "odom", "odom", "scan", "odom", "odom", "odom"]
     );
-    odom(&r[3], 0, (1.2, 0.3, 0.1));
+    // The reset's timestamp 0, repaired halfway between its neighbours' (2 s and 3.5 s).
+    odom(&r[3], 2_750_000_000, (1.2, 0.3, 0.1));
     odom(
         &r[4],
         3_500_000_000,
@@ -132,8 +139,10 @@ fn plain_flavour_keeps_odom_poses_as_written() {
     );
     assert_eq!(stats.references, 0);
     assert_eq!(stats.odometry_resets, 0);
+    assert_eq!(stats.backwards_time, 0);
     assert_eq!(
-        stats.backwards_time, 2,
+        stats.time_repairs.zero.first_lines,
+        [6, 10],
         "the two reset records have timestamp 0"
     );
 }

@@ -146,6 +146,7 @@ fn carmen_fixture_to_bag() {
             sigma_deg: 2.0,
             seed: 7,
         }),
+        strict: false,
     };
     let summary = import_log(&input, &bag, LogFormat::Carmen(options)).unwrap();
     assert_eq!(

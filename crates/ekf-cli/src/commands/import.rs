@@ -10,6 +10,7 @@
 
 use crate::import::{
     open_log, read_carmen, read_mrpt, CarmenOptions, ImportError, ImportRecord, ImportStats,
+    RepairCount, SYNTHETIC_STEP_NS,
 };
 use crate::mcap_io::{BagWriter, WriteError};
 use crate::ros2::build::{
@@ -215,4 +216,51 @@ impl Converter<'_> {
         self.written += 1;
         Ok(())
     }
+}
+
+/// What the import repaired or left out, one sentence each, for the text summary: the
+/// clock's repairs and duplicates, with their first lines. Empty for a log that needed
+/// nothing.
+pub fn repair_lines(stats: &ImportStats) -> Vec<String> {
+    let r = &stats.time_repairs;
+    let mut lines = Vec::new();
+    if r.clock_broken {
+        lines.push(format!(
+            "the log's clock is broken throughout (its stamps do not advance); every record \
+             has a synthetic time in file order, {} s apart",
+            SYNTHETIC_STEP_NS as f64 * 1e-9
+        ));
+    }
+    let kinds = [
+        ("negative", &r.negative),
+        ("zero", &r.zero),
+        ("below one nanosecond", &r.denormal),
+        ("earlier than the stamp before", &r.backwards),
+    ];
+    for (what, count) in kinds {
+        if count.count > 0 {
+            lines.push(format!(
+                "{} timestamps {what} repaired from their neighbours ({})",
+                count.count,
+                where_found(count)
+            ));
+        }
+    }
+    if stats.duplicates.count > 0 {
+        lines.push(format!(
+            "{} duplicate records left out ({})",
+            stats.duplicates.count,
+            where_found(&stats.duplicates)
+        ));
+    }
+    lines
+}
+
+/// "lines 3, 9, …": the first lines of a repair, with an ellipsis when there are more.
+fn where_found(count: &RepairCount) -> String {
+    let mut lines: Vec<String> = count.first_lines.iter().map(u64::to_string).collect();
+    if count.count > lines.len() as u64 {
+        lines.push("…".to_string());
+    }
+    format!("lines {}", lines.join(", "))
 }

@@ -2,6 +2,7 @@
 //! `main.rs` prints it.
 
 pub mod compare;
+pub mod corpus;
 pub mod emulate;
 pub mod evaluate;
 pub mod experiment;

@@ -42,11 +42,13 @@
 //! yields no references. Before the first reset the chain is the `ODOM` poses exactly,
 //! so a plain log's odometry comes out as it is written.
 
+use super::clock::{ClockRepair, Entry, RawStamp, Stamp, PROBE_RECORDS};
 use super::compass::{CompassNoise, SyntheticCompass};
 use super::error::ImportError;
 use super::fields::Fields;
+use super::range_limit::range_limit;
 use super::record::{ImportRecord, Odometry, Reference, Scan};
-use super::stats::ImportStats;
+use super::stats::{ImportStats, RangeMax};
 use super::stream::{LineParser, Output, RecordStream};
 use ekf_core::Pose2;
 use std::f64::consts::{FRAC_PI_2, PI};
@@ -74,6 +76,9 @@ pub struct CarmenOptions {
     pub laser_max_range: f64,
     /// Make a synthetic compass reading from every reference pose.
     pub synthetic_compass: Option<SyntheticCompass>,
+    /// Refuse a log whose timestamps need repair (see [`TimeRepairs`](super::TimeRepairs))
+    /// instead of repairing them.
+    pub strict: bool,
 }
 
 impl Default for CarmenOptions {
@@ -82,6 +87,7 @@ impl Default for CarmenOptions {
             flavour: CarmenFlavour::Auto,
             laser_max_range: 50.0,
             synthetic_compass: None,
+            strict: false,
         }
     }
 }
@@ -120,16 +126,31 @@ struct Chain {
     raw: Pose2<f64>,
 }
 
+/// A record on its way out, and whether it is a `FLASER` scan (whose range limit comes
+/// from the data).
+struct Held {
+    entry: Entry,
+    flaser: bool,
+}
+
 /// The state of a CARMEN import between lines.
 struct CarmenParser {
     flavour: CarmenFlavour,
     laser_max_range: f64,
+    param_range_max: Option<f64>,
     front_laser_offset: f64,
     compass: Option<CompassNoise>,
-    /// Time and robot pose of the latest scan not yet followed by an `ODOM`.
-    open_scan: Option<(u64, Pose2<f64>)>,
+    /// Robot pose of the latest scan not yet followed by an `ODOM`.
+    open_scan: Option<Pose2<f64>>,
     chain: Option<Chain>,
     reset_seen: bool,
+    /// Pose and stamp of the last `ODOM` line since the last scan (duplicates, resets).
+    last_odom: Option<(Pose2<f64>, RawStamp)>,
+    /// The look-ahead window until the clock and the range limit are judged.
+    probe: Option<Vec<Held>>,
+    probe_stamps: usize,
+    range_max: Option<RangeMax>,
+    clock: ClockRepair,
 }
 
 impl CarmenParser {
@@ -137,17 +158,23 @@ impl CarmenParser {
         Self {
             flavour: options.flavour,
             laser_max_range: options.laser_max_range,
+            param_range_max: None,
             front_laser_offset: 0.0,
             compass: options.synthetic_compass.map(CompassNoise::new),
             open_scan: None,
             chain: None,
             reset_seen: false,
+            last_odom: None,
+            probe: Some(Vec::new()),
+            probe_stamps: 0,
+            range_max: None,
+            clock: ClockRepair::new(options.strict),
         }
     }
 
     fn param(&mut self, f: &Fields) -> Result<(), ImportError> {
         match f.text(2) {
-            Some("robot_front_laser_max") => self.laser_max_range = f.f64(3, "value")?,
+            Some("robot_front_laser_max") => self.param_range_max = Some(f.f64(3, "value")?),
             Some("robot_frontlaser_offset") => self.front_laser_offset = f.f64(3, "value")?,
             _ => {}
         }
@@ -160,16 +187,25 @@ impl CarmenParser {
         for (field, name) in [(5, "tv"), (6, "rv"), (7, "accel")] {
             f.f64(field, name)?;
         }
-        let t_ns = f.time_ns(8, "timestamp")?;
-        let open_scan = self.open_scan.take();
-        if let Some((scan_ns, scan_pose)) = open_scan.filter(|&(_, p)| t_ns == 0 && p == pose) {
-            out.stats.odometry_resets += 1;
-            let raw = self.chain.map_or(pose, |c| c.raw);
-            self.chain = Some(Chain { prev: pose, raw });
-            self.reset_seen = true;
-            if self.flavour == CarmenFlavour::Auto {
-                self.reference(scan_ns, scan_pose, out);
+        let raw_stamp = f.stamp(8, "timestamp")?;
+        let last = self.last_odom.replace((pose, raw_stamp));
+        if let Some(scan_pose) = self.open_scan.take() {
+            // A reset is the first ODOM after a scan, at the scan's pose. A plain log's robot
+            // standing still repeats its pose with a good stamp: that is no reset.
+            let standing =
+                last.is_some_and(|(p, _)| p == pose) && matches!(raw_stamp, RawStamp::Valid(_));
+            if scan_pose == pose && !standing {
+                out.stats.odometry_resets += 1;
+                let raw = self.chain.map_or(pose, |c| c.raw);
+                self.chain = Some(Chain { prev: pose, raw });
+                self.reset_seen = true;
+                if self.flavour == CarmenFlavour::Auto {
+                    self.reference(f.line(), scan_pose, out)?;
+                }
+                return Ok(());
             }
+        } else if last == Some((pose, raw_stamp)) {
+            out.stats.duplicates.add(f.line());
             return Ok(());
         }
         let raw = match self.chain {
@@ -177,9 +213,8 @@ impl CarmenParser {
             _ => pose,
         };
         self.chain = Some(Chain { prev: pose, raw });
-        out.queue
-            .push_back(ImportRecord::Odometry(Odometry { t_ns, pose: raw }));
-        Ok(())
+        let record = ImportRecord::Odometry(Odometry { t_ns: 0, pose: raw });
+        self.emit(f, record, own(raw_stamp, 8, "timestamp"), false, out)
     }
 
     fn flaser(&mut self, f: &Fields, out: &mut Output) -> Result<(), ImportError> {
@@ -189,11 +224,11 @@ impl CarmenParser {
         let ranges = f.ranges(3, n)?;
         let robot = f.pose(n + 3, ["x", "y", "theta"])?;
         f.pose(n + 6, ["odom_x", "odom_y", "odom_theta"])?;
-        let t_ns = f.time_ns(n + 9, "timestamp")?;
-        f.time_ns(n + 11, "logger_timestamp")?;
+        let raw_stamp = f.stamp(n + 9, "timestamp")?;
+        f.stamp(n + 11, "logger_timestamp")?;
         let span = (n - n % 2).max(1) as f64;
         let scan = Scan {
-            t_ns,
+            t_ns: 0,
             angle_min: -FRAC_PI_2,
             angle_increment: PI / span,
             range_min: 0.0,
@@ -201,8 +236,14 @@ impl CarmenParser {
             ranges,
             mount: Pose2::new(self.front_laser_offset, 0.0, 0.0),
         };
-        self.scan(scan, robot, out);
-        Ok(())
+        self.scan(
+            f,
+            scan,
+            own(raw_stamp, n + 9, "timestamp"),
+            true,
+            robot,
+            out,
+        )
     }
 
     fn robotlaser(&mut self, f: &Fields, out: &mut Output) -> Result<(), ImportError> {
@@ -234,10 +275,10 @@ impl CarmenParser {
         for (i, name) in names.into_iter().enumerate() {
             f.f64(k + 6 + i, name)?;
         }
-        let t_ns = f.time_ns(k + 11, "timestamp")?;
-        f.time_ns(k + 13, "logger_timestamp")?;
+        let raw_stamp = f.stamp(k + 11, "timestamp")?;
+        f.stamp(k + 13, "logger_timestamp")?;
         let scan = Scan {
-            t_ns,
+            t_ns: 0,
             angle_min: f.f64(3, "start_angle")?,
             angle_increment: f.f64(5, "angular_resolution")?,
             range_min: 0.0,
@@ -245,29 +286,144 @@ impl CarmenParser {
             ranges,
             mount: robot.inverse().compose(&laser),
         };
-        self.scan(scan, robot, out);
+        self.scan(
+            f,
+            scan,
+            own(raw_stamp, k + 11, "timestamp"),
+            false,
+            robot,
+            out,
+        )
+    }
+
+    fn scan(
+        &mut self,
+        f: &Fields,
+        scan: Scan,
+        stamp: Stamp,
+        flaser: bool,
+        robot: Pose2<f64>,
+        out: &mut Output,
+    ) -> Result<(), ImportError> {
+        self.last_odom = None;
+        self.emit(f, ImportRecord::Scan(scan), stamp, flaser, out)?;
+        if self.flavour == CarmenFlavour::Corrected {
+            self.reference(f.line(), robot, out)?;
+        }
+        if self.flavour != CarmenFlavour::Plain {
+            self.open_scan = Some(robot);
+        }
         Ok(())
     }
 
-    fn scan(&mut self, scan: Scan, robot: Pose2<f64>, out: &mut Output) {
-        let t_ns = scan.t_ns;
-        out.queue.push_back(ImportRecord::Scan(scan));
-        if self.flavour == CarmenFlavour::Corrected {
-            self.reference(t_ns, robot, out);
+    /// A reference at `pose` for the scan just emitted, and its synthetic compass reading.
+    fn reference(
+        &mut self,
+        line: u64,
+        pose: Pose2<f64>,
+        out: &mut Output,
+    ) -> Result<(), ImportError> {
+        let record = ImportRecord::Reference(Reference { t_ns: 0, pose });
+        self.hold(line, "FLASER", record, Stamp::Shared, false, out)?;
+        if let Some(noise) = &mut self.compass {
+            // The heading is drawn now, in file order; its time is the scan's.
+            let record = ImportRecord::Compass(noise.reading(0, &pose));
+            self.hold(line, "FLASER", record, Stamp::Shared, false, out)?;
         }
-        if self.flavour != CarmenFlavour::Plain {
-            self.open_scan = Some((t_ns, robot));
-        }
+        Ok(())
     }
 
-    fn reference(&mut self, t_ns: u64, pose: Pose2<f64>, out: &mut Output) {
-        out.queue
-            .push_back(ImportRecord::Reference(Reference { t_ns, pose }));
-        if let Some(noise) = &mut self.compass {
-            out.queue
-                .push_back(ImportRecord::Compass(noise.reading(t_ns, &pose)));
-        }
+    fn emit(
+        &mut self,
+        f: &Fields,
+        record: ImportRecord,
+        stamp: Stamp,
+        flaser: bool,
+        out: &mut Output,
+    ) -> Result<(), ImportError> {
+        let tag = match record {
+            ImportRecord::Odometry(_) => "ODOM",
+            _ if flaser => "FLASER",
+            _ => "ROBOTLASER1",
+        };
+        self.hold(f.line(), tag, record, stamp, flaser, out)
     }
+
+    /// Passes a record on: into the look-ahead window while it is open, else to the clock.
+    fn hold(
+        &mut self,
+        line: u64,
+        tag: &'static str,
+        record: ImportRecord,
+        stamp: Stamp,
+        flaser: bool,
+        out: &mut Output,
+    ) -> Result<(), ImportError> {
+        let held = Held {
+            entry: Entry {
+                record,
+                line,
+                tag,
+                stamp,
+            },
+            flaser,
+        };
+        let Some(probe) = &mut self.probe else {
+            return self.release(held, out);
+        };
+        if matches!(stamp, Stamp::Own { .. }) {
+            self.probe_stamps += 1;
+        }
+        probe.push(held);
+        if self.probe_stamps >= PROBE_RECORDS {
+            self.close_probe(out)?;
+        }
+        Ok(())
+    }
+
+    /// Judges the clock and the range limit on the window, then releases it.
+    fn close_probe(&mut self, out: &mut Output) -> Result<(), ImportError> {
+        let Some(probe) = self.probe.take() else {
+            return Ok(());
+        };
+        let flaser_ranges =
+            probe
+                .iter()
+                .filter(|h| h.flaser)
+                .filter_map(|h| match &h.entry.record {
+                    ImportRecord::Scan(s) => Some(s.ranges.as_slice()),
+                    _ => None,
+                });
+        self.range_max = Some(range_limit(
+            flaser_ranges,
+            self.param_range_max,
+            self.laser_max_range,
+        ));
+        let (held, entries): (Vec<bool>, Vec<Entry>) =
+            probe.into_iter().map(|h| (h.flaser, h.entry)).unzip();
+        self.clock.judge(&entries, out)?;
+        for (flaser, entry) in held.into_iter().zip(entries) {
+            self.release(Held { entry, flaser }, out)?;
+        }
+        Ok(())
+    }
+
+    fn release(&mut self, mut held: Held, out: &mut Output) -> Result<(), ImportError> {
+        if held.flaser {
+            if let (ImportRecord::Scan(scan), Some(limit)) =
+                (&mut held.entry.record, self.range_max)
+            {
+                scan.range_max = limit.value;
+                out.stats.laser_range_max = Some(limit);
+            }
+        }
+        self.clock.place(held.entry, out)
+    }
+}
+
+/// A record's own stamp, read from field `field` (`name`).
+fn own(raw: RawStamp, field: usize, name: &'static str) -> Stamp {
+    Stamp::Own { raw, field, name }
 }
 
 impl LineParser for CarmenParser {
@@ -286,6 +442,12 @@ impl LineParser for CarmenParser {
             Some("ROBOTLASER1") => self.robotlaser(&f, out)?,
             Some(_) => out.stats.unknown_lines += 1,
         }
+        Ok(())
+    }
+
+    fn finish(&mut self, out: &mut Output) -> Result<(), ImportError> {
+        self.close_probe(out)?;
+        self.clock.finish(out);
         Ok(())
     }
 }

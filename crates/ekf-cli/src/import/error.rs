@@ -64,4 +64,39 @@ pub enum ImportError {
         /// Number of fields the line has.
         found: usize,
     },
+    /// A timestamp needs repair and the import is strict.
+    #[error(
+        "line {line}: {record} field {field} ({name}): the time is {flaw} (--strict refuses \
+         repairing it)"
+    )]
+    BadStamp {
+        /// 1-based line number.
+        line: u64,
+        /// Record tag.
+        record: &'static str,
+        /// 1-based field number, the tag being field 1.
+        field: usize,
+        /// What the field means.
+        name: &'static str,
+        /// What is wrong with it, e.g. `negative`.
+        flaw: &'static str,
+    },
+    /// The clock is broken throughout and the import is strict.
+    #[error(
+        "line {line}: the clock is broken throughout the first {stamps} stamped records \
+         ({valid} positive times, {increasing} of {pairs} consecutive ones increasing); \
+         --strict refuses importing the log in file order"
+    )]
+    BrokenClock {
+        /// 1-based line number of the first record judged.
+        line: u64,
+        /// Records with a stamp of their own that were judged.
+        stamps: usize,
+        /// Of those, stamps that are positive times.
+        valid: usize,
+        /// Consecutive pairs of positive stamps that increase.
+        increasing: usize,
+        /// Consecutive pairs of positive stamps.
+        pairs: usize,
+    },
 }

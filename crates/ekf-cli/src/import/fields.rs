@@ -1,6 +1,7 @@
 //! Reading typed values out of one whitespace-separated log line, with errors that name
 //! the line, the record and the field.
 
+use super::clock::RawStamp;
 use super::error::ImportError;
 use ekf_core::Pose2;
 
@@ -142,6 +143,18 @@ impl<'a> Fields<'a> {
         (first..first + count)
             .map(|f| self.f32(f, "range"))
             .collect()
+    }
+
+    /// Field `field` as a timestamp in seconds, possibly one that needs repair.
+    pub(crate) fn stamp(&self, field: usize, name: &'static str) -> Result<RawStamp, ImportError> {
+        self.text(field)
+            .and_then(RawStamp::parse)
+            .ok_or_else(|| self.bad(field, name, "a time in seconds"))
+    }
+
+    /// The 1-based line number.
+    pub(crate) fn line(&self) -> u64 {
+        self.line
     }
 
     /// Field `field` as a time in seconds, converted to nanoseconds.

@@ -27,21 +27,24 @@
 //!   type and the field, after every record before it was yielded.
 
 mod carmen;
+mod clock;
 mod compass;
 mod error;
 mod fields;
 mod lines;
 mod mrpt;
+mod range_limit;
 mod record;
 mod source;
 mod stats;
 mod stream;
 
 pub use carmen::{read_carmen, CarmenFlavour, CarmenOptions, CarmenReader};
+pub use clock::{RepairCount, TimeRepairs, PROBE_RECORDS, SYNTHETIC_STEP_NS};
 pub use compass::SyntheticCompass;
 pub use error::ImportError;
 pub use lines::MAX_LINE_BYTES;
 pub use mrpt::{read_mrpt, MrptReader};
 pub use record::{Compass, ImportRecord, Odometry, Reference, Scan};
 pub use source::open_log;
-pub use stats::ImportStats;
+pub use stats::{ImportStats, RangeMax, RangeMaxSource};

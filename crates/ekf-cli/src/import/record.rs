@@ -27,6 +27,16 @@ impl ImportRecord {
             Self::Compass(r) => r.t_ns,
         }
     }
+
+    /// Sets the record's time (ns): the importers' clock repair gives it.
+    pub(crate) fn set_t_ns(&mut self, t_ns: u64) {
+        match self {
+            Self::Odometry(r) => r.t_ns = t_ns,
+            Self::Scan(r) => r.t_ns = t_ns,
+            Self::Reference(r) => r.t_ns = t_ns,
+            Self::Compass(r) => r.t_ns = t_ns,
+        }
+    }
 }
 
 /// A raw odometry pose in the odometry frame.

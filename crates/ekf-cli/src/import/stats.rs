@@ -1,9 +1,11 @@
 //! What an import saw: record counts, time span, time going backwards, skipped lines.
 
+use super::clock::{RepairCount, TimeRepairs};
 use super::record::ImportRecord;
+use serde::Serialize;
 
 /// Counts kept while importing; complete once the iterator has returned `None`.
-#[derive(Debug, Clone, Default, PartialEq, Eq, serde::Serialize)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
 pub struct ImportStats {
     /// Odometry records yielded.
     pub odometry: u64,
@@ -22,6 +24,13 @@ pub struct ImportStats {
     /// Records whose time is earlier than the record yielded before them. They are kept
     /// in file order, not sorted.
     pub backwards_time: u64,
+    /// Timestamps repaired (CARMEN): what kind, how many, the first lines.
+    pub time_repairs: TimeRepairs,
+    /// Records left out because they repeat the record before them exactly (CARMEN).
+    pub duplicates: RepairCount,
+    /// The range at and beyond which `FLASER` readings are no return (m), and where it came
+    /// from; `None` before the first scan.
+    pub laser_range_max: Option<RangeMax>,
     /// `#` comment lines.
     pub comment_lines: u64,
     /// `PARAM` lines.
@@ -30,6 +39,27 @@ pub struct ImportStats {
     pub neff_lines: u64,
     /// Lines of record types the importer does not read (e.g. `RLASER`, `TRUEPOS`).
     pub unknown_lines: u64,
+}
+
+/// Where a log's laser range limit came from.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RangeMaxSource {
+    /// The readings saturate: many sit within 1 % of the largest one.
+    Saturation,
+    /// The log's `PARAM robot_front_laser_max` (no saturation seen).
+    Param,
+    /// The importer's option (no saturation seen, no `PARAM`).
+    Default,
+}
+
+/// A log's laser range limit.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct RangeMax {
+    /// Readings at or beyond it are no return (m).
+    pub value: f64,
+    /// Where it came from.
+    pub source: RangeMaxSource,
 }
 
 impl ImportStats {

@@ -21,16 +21,24 @@ pub(crate) struct Output {
 pub(crate) trait LineParser {
     /// Parses line `line` (`text`, without its line ending) into `out`.
     fn parse_line(&mut self, line: u64, text: &str, out: &mut Output) -> Result<(), ImportError>;
+
+    /// Emits what the parser still holds back at the end of the input.
+    fn finish(&mut self, _out: &mut Output) -> Result<(), ImportError> {
+        Ok(())
+    }
 }
 
 /// A streaming importer over a `BufRead`: yields records one by one, stops after the
-/// first error (everything before it has been yielded), and then reports [`ImportStats`].
+/// first error (everything before it, including what the parser held back, is yielded
+/// first), and then reports [`ImportStats`].
 pub struct RecordStream<R, P> {
     lines: LineSource<R>,
     parser: P,
     out: Output,
     last_ns: Option<u64>,
     done: bool,
+    /// The error that ended the input, yielded after the records held back before it.
+    error: Option<ImportError>,
 }
 
 impl<R: BufRead, P> RecordStream<R, P> {
@@ -41,6 +49,7 @@ impl<R: BufRead, P> RecordStream<R, P> {
             out: Output::default(),
             last_ns: None,
             done: false,
+            error: None,
         }
     }
 
@@ -60,6 +69,9 @@ impl<R: BufRead, P: LineParser> Iterator for RecordStream<R, P> {
                 self.last_ns = Some(record.t_ns());
                 return Some(Ok(record));
             }
+            if let Some(e) = self.error.take() {
+                return Some(Err(e));
+            }
             if self.done {
                 return None;
             }
@@ -67,14 +79,19 @@ impl<R: BufRead, P: LineParser> Iterator for RecordStream<R, P> {
                 Ok(Some((line, text))) => self.parser.parse_line(line, text, &mut self.out),
                 Ok(None) => {
                     self.done = true;
-                    Ok(())
+                    self.parser.finish(&mut self.out)
                 }
                 Err(e) => Err(e),
             };
             if let Err(e) = step {
                 self.done = true;
-                self.out.queue.clear();
-                return Some(Err(e));
+                if !self.out.queue.is_empty() {
+                    // Records the failing line released (a strict clock) go with it.
+                    self.out.queue.clear();
+                } else if self.parser.finish(&mut self.out).is_err() {
+                    self.out.queue.clear();
+                }
+                self.error = Some(e);
             }
         }
     }

@@ -21,13 +21,15 @@ struct Pairing {
     sums: Sums,
 }
 
-/// Running sums of the pose errors of the pairs.
-#[derive(Debug, Clone, Copy, Default)]
+/// Running sums of the pose errors of the pairs, and each pair's position error (4 bytes
+/// a pair, for the median and the shares over a bound).
+#[derive(Debug, Clone, Default)]
 struct Sums {
     matched: usize,
     sum_sq_position: f64,
     max_position: f64,
     sum_sq_heading: f64,
+    position_errors: Vec<f32>,
 }
 
 impl Pairing {
@@ -98,6 +100,7 @@ impl Pairing {
         s.matched += 1;
         s.sum_sq_position += d * d;
         s.max_position = s.max_position.max(d);
+        s.position_errors.push(d as f32);
         s.sum_sq_heading += angle_diff(c.pose.theta, q.pose.theta).powi(2);
     }
 }
@@ -112,17 +115,35 @@ pub struct OnlineAccuracy {
     last_estimate_ns: Option<u64>,
 }
 
-/// The result: matched pairs, position RMSE and maximum (m), heading RMSE (rad).
+/// The result: matched pairs, position RMSE, median, 95th percentile and maximum (m), the
+/// shares of pairs over 0.5 m and 1 m, heading RMSE (rad).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct AccuracyTotals {
     /// Pairs of poses.
     pub matched: usize,
     /// Position RMSE (m).
     pub position_rmse: f64,
+    /// Median position error (m), as `numpy.median`.
+    pub position_median: f64,
+    /// 95th percentile of the position error (m), linear between ranks as
+    /// `numpy.percentile`.
+    pub position_p95: f64,
     /// Largest position error (m).
     pub position_max: f64,
+    /// Share of pairs with a position error over 0.5 m.
+    pub share_over_half_m: f64,
+    /// Share of pairs with a position error over 1 m.
+    pub share_over_1m: f64,
     /// Heading RMSE (rad).
     pub heading_rmse: f64,
+}
+
+/// The `q`-quantile (0 ≤ q ≤ 1) of the sorted, non-empty `values`, linear between ranks.
+fn quantile(sorted: &[f32], q: f64) -> f64 {
+    let at = q * (sorted.len() - 1) as f64;
+    let (lo, hi) = (at.floor() as usize, at.ceil() as usize);
+    let (a, b) = (f64::from(sorted[lo]), f64::from(sorted[hi]));
+    a + (b - a) * (at - lo as f64)
 }
 
 impl OnlineAccuracy {
@@ -165,10 +186,18 @@ impl OnlineAccuracy {
         };
         (s.matched > 0).then(|| {
             let n = s.matched as f64;
+            let mut errors = s.position_errors;
+            errors.sort_by(f32::total_cmp);
+            let share_over =
+                |bound: f64| errors.iter().filter(|&&e| f64::from(e) > bound).count() as f64 / n;
             AccuracyTotals {
                 matched: s.matched,
                 position_rmse: (s.sum_sq_position / n).sqrt(),
+                position_median: quantile(&errors, 0.5),
+                position_p95: quantile(&errors, 0.95),
                 position_max: s.max_position,
+                share_over_half_m: share_over(0.5),
+                share_over_1m: share_over(1.0),
                 heading_rmse: (s.sum_sq_heading / n).sqrt(),
             }
         })

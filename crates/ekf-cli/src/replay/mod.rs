@@ -486,14 +486,29 @@ impl MotionRate {
 struct MotionClock {
     state_ns: Option<u64>,
     rate: Option<MotionRate>,
+    /// The time of the initial state: motion before it is already in the initial pose (a
+    /// reference pose taken as the start), so only the part of a step after it counts.
+    start_ns: u64,
 }
 
 impl MotionClock {
+    /// A clock whose initial state refers to `start_ns`.
+    fn starting_at(start_ns: u64) -> Self {
+        Self {
+            start_ns,
+            ..Self::default()
+        }
+    }
+
     /// Takes a motion step over `(t0, t1]` and returns the part of it after the time the
     /// state already refers to (a scan or heading in between was fused at its own time,
-    /// after a prediction at the previous rate); `None` if nothing of it is left.
+    /// after a prediction at the previous rate, or the initial state's time); `None` if
+    /// nothing of it is left.
     fn advance(&mut self, step: MotionStep, t0: u64, t1: u64) -> Option<MotionStep> {
-        let start = self.state_ns.map_or(t0, |s| s.max(t0));
+        if t1 <= self.start_ns {
+            return None;
+        }
+        let start = self.state_ns.map_or(t0, |s| s.max(t0)).max(self.start_ns);
         self.state_ns = Some(self.state_ns.map_or(t1, |s| s.max(t1)));
         self.rate = Some(step.rate((t1 - t0) as f64 * 1e-9));
         (start < t1).then(|| step.part((t1 - start) as f64 / (t1 - t0) as f64))
@@ -604,7 +619,7 @@ impl<'a> Run<'a> {
             out,
             summary,
             poses: sink::PoseSink::new(options.tum.as_deref(), options.keep_trajectories)?,
-            clock: MotionClock::default(),
+            clock: MotionClock::starting_at(start_ns),
             wheels: WheelTracker::new(&config.motion.left_joint, &config.motion.right_joint),
             odometry: OdometryTracker::default(),
             timer: StageTimer {
@@ -663,7 +678,11 @@ impl<'a> Run<'a> {
         summary.accuracy = poses.accuracy.map(|a| summary::Accuracy {
             matched_poses: a.matched,
             position_rmse_m: a.position_rmse,
+            position_median_m: a.position_median,
+            position_p95_m: a.position_p95,
             position_max_m: a.position_max,
+            share_over_half_m: a.share_over_half_m,
+            share_over_1m: a.share_over_1m,
             heading_rmse_deg: a.heading_rmse.to_degrees(),
         });
         summary.wall_time_s = started.elapsed().as_secs_f64();
@@ -750,7 +769,6 @@ impl<'a> Run<'a> {
         };
         match step {
             Err(skip) => self.skip(topic, now, skip),
-            Ok(_) if now < self.start_ns => {}
             Ok((step, t0, t1)) => {
                 if self.apply_motion(step, t0, t1)? {
                     self.summary.motion_steps += 1;

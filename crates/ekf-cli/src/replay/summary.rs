@@ -131,8 +131,16 @@ pub struct Accuracy {
     pub matched_poses: usize,
     /// Position RMSE (m).
     pub position_rmse_m: f64,
+    /// Median position error (m).
+    pub position_median_m: f64,
+    /// 95th percentile of the position error (m).
+    pub position_p95_m: f64,
     /// Largest position error (m).
     pub position_max_m: f64,
+    /// Share of matched poses with a position error over 0.5 m (0–1).
+    pub share_over_half_m: f64,
+    /// Share of matched poses with a position error over 1 m (0–1).
+    pub share_over_1m: f64,
     /// Heading RMSE (degrees).
     pub heading_rmse_deg: f64,
 }

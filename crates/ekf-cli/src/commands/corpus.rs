@@ -1,0 +1,162 @@
+//! `ekf corpus DIR`: the real-log benchmark. Every CARMEN log in a folder is imported as
+//! it is, mapped from its reference, and replayed laser-only with the given (default)
+//! configuration from the first reference pose; one row per log with the accuracy at
+//! every scan and the wall time.
+
+use super::import::{import_log, LogFormat};
+use super::map::{build_map, MapSource};
+use crate::config::Config;
+use crate::import::CarmenOptions;
+use crate::replay::{replay, Mode, ReplayOptions};
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// One log's result.
+#[derive(Debug, Clone, Serialize)]
+pub struct CorpusRow {
+    /// The log's name: its file name without `-corrected`, `.log` and `.gz`.
+    pub log: String,
+    /// Scans in the log.
+    pub scans: u64,
+    /// Timestamps the import repaired, and whether the clock was broken throughout.
+    pub repaired_stamps: u64,
+    /// The clock was broken throughout (synthetic times in file order).
+    pub clock_broken: bool,
+    /// Position RMSE against the reference at every scan (m).
+    pub rmse_m: f64,
+    /// Median position error (m).
+    pub median_m: f64,
+    /// 95th percentile of the position error (m).
+    pub p95_m: f64,
+    /// Largest position error (m).
+    pub max_m: f64,
+    /// Share of scans with an error over 0.5 m (0–1).
+    pub over_half_m: f64,
+    /// Share of scans with an error over 1 m (0–1).
+    pub over_1m: f64,
+    /// Wall time of the replay alone (s).
+    pub replay_s: f64,
+    /// Wall time of import, map and replay (s).
+    pub wall_time_s: f64,
+    /// Why the log could not be run, if it could not (the other fields are then 0).
+    pub error: Option<String>,
+}
+
+/// The CARMEN logs in `dir` (`*.log`, `*.log.gz`), sorted by name.
+pub fn corpus_logs(dir: &Path) -> std::io::Result<Vec<PathBuf>> {
+    let mut logs: Vec<PathBuf> = std::fs::read_dir(dir)?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| {
+            let name = p.file_name().and_then(|n| n.to_str()).unwrap_or("");
+            name.ends_with(".log") || name.ends_with(".log.gz")
+        })
+        .collect();
+    logs.sort();
+    Ok(logs)
+}
+
+/// A log's short name: `seattle-corrected.log.gz` → `seattle`.
+pub fn log_name(path: &Path) -> String {
+    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("log");
+    let name = name.strip_suffix(".gz").unwrap_or(name);
+    let name = name.strip_suffix(".log").unwrap_or(name);
+    name.strip_suffix("-corrected").unwrap_or(name).to_string()
+}
+
+/// Imports, maps and replays one log, with intermediate files in `work_dir`.
+pub fn run_log(log: &Path, config: &Config, work_dir: &Path) -> CorpusRow {
+    let started = Instant::now();
+    let name = log_name(log);
+    let mut row = CorpusRow {
+        log: name.clone(),
+        scans: 0,
+        repaired_stamps: 0,
+        clock_broken: false,
+        rmse_m: 0.0,
+        median_m: 0.0,
+        p95_m: 0.0,
+        max_m: 0.0,
+        over_half_m: 0.0,
+        over_1m: 0.0,
+        replay_s: 0.0,
+        wall_time_s: 0.0,
+        error: None,
+    };
+    if let Err(e) = fill_row(log, config, work_dir, &name, &mut row) {
+        row.error = Some(e);
+    }
+    row.wall_time_s = started.elapsed().as_secs_f64();
+    row
+}
+
+fn fill_row(
+    log: &Path,
+    config: &Config,
+    work_dir: &Path,
+    name: &str,
+    row: &mut CorpusRow,
+) -> Result<(), String> {
+    let bag = work_dir.join(format!("{name}.mcap"));
+    let imported = import_log(log, &bag, LogFormat::Carmen(CarmenOptions::default()))
+        .map_err(|e| e.to_string())?;
+    row.scans = imported.stats.scans;
+    row.repaired_stamps = imported.stats.time_repairs.repaired();
+    row.clock_broken = imported.stats.time_repairs.clock_broken;
+    let (map, _) = build_map(&bag, config, MapSource::Reference(Default::default()))
+        .map_err(|e| e.to_string())?;
+    let map_path = work_dir.join(format!("{name}-map.json"));
+    let json = map.to_json().map_err(|e| e.to_string())?;
+    std::fs::write(&map_path, json).map_err(|e| format!("{}: {e}", map_path.display()))?;
+    let options = ReplayOptions {
+        mode: Mode::Laser,
+        map: Some(map_path),
+        init_from_truth: true,
+        out_mcap: None,
+        tum: Some(work_dir.join(format!("{name}.tum"))),
+        keep_trajectories: false,
+    };
+    let outcome = replay(&bag, config, &options, &mut |_, _| {}).map_err(|e| e.to_string())?;
+    if let Some(failure) = outcome.failure {
+        return Err(failure.to_string());
+    }
+    let s = outcome.summary;
+    let a = s
+        .accuracy
+        .ok_or_else(|| "no pose matched a reference pose".to_string())?;
+    row.rmse_m = a.position_rmse_m;
+    row.median_m = a.position_median_m;
+    row.p95_m = a.position_p95_m;
+    row.max_m = a.position_max_m;
+    row.over_half_m = a.share_over_half_m;
+    row.over_1m = a.share_over_1m;
+    row.replay_s = s.wall_time_s;
+    Ok(())
+}
+
+/// The rows as a Markdown table.
+pub fn table(rows: &[CorpusRow]) -> String {
+    let mut t = String::from(
+        "| log | scans | RMSE (m) | median | p95 | max | > 0.5 m | > 1 m | replay (s) |\n\
+         |---|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+    );
+    for r in rows {
+        if let Some(e) = &r.error {
+            t.push_str(&format!("| {} | – | failed: {e} | | | | | | |\n", r.log));
+            continue;
+        }
+        t.push_str(&format!(
+            "| {} | {} | {:.3} | {:.3} | {:.3} | {:.2} | {:.1} % | {:.1} % | {:.2} |\n",
+            r.log,
+            r.scans,
+            r.rmse_m,
+            r.median_m,
+            r.p95_m,
+            r.max_m,
+            100.0 * r.over_half_m,
+            100.0 * r.over_1m,
+            r.replay_s
+        ));
+    }
+    t
+}
