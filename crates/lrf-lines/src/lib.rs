@@ -15,6 +15,7 @@ pub mod map;
 pub mod matching;
 pub mod observed;
 pub mod point3d;
+pub mod relocalize;
 pub mod scan;
 
 pub use extract::{ExtractionError, ExtractionParams, LineExtractor};
@@ -28,5 +29,6 @@ pub use matching::{
 };
 pub use observed::ObservedLine;
 pub use point3d::pitched_scan_point;
+pub use relocalize::{relocalize, Hypothesis, Relocalization, RelocalizeParams, SearchWindow};
 pub use scan::LaserScan;
 pub use scan::ScanError;

@@ -35,6 +35,10 @@ pub struct CorpusRow {
     pub over_half_m: f64,
     /// Share of scans with an error over 1 m (0–1).
     pub over_1m: f64,
+    /// Losses: motion gaps and scans that began a run of unfused ones.
+    pub losses: u64,
+    /// Relocalizations that moved the filter.
+    pub relocalizations: u64,
     /// Wall time of the replay alone (s).
     pub replay_s: f64,
     /// Wall time of import, map and replay (s).
@@ -79,6 +83,8 @@ pub fn run_log(log: &Path, config: &Config, work_dir: &Path) -> CorpusRow {
         max_m: 0.0,
         over_half_m: 0.0,
         over_1m: 0.0,
+        losses: 0,
+        relocalizations: 0,
         replay_s: 0.0,
         wall_time_s: 0.0,
         error: None,
@@ -130,6 +136,8 @@ fn fill_row(
     row.max_m = a.position_max_m;
     row.over_half_m = a.share_over_half_m;
     row.over_1m = a.share_over_1m;
+    row.losses = s.tracking.losses;
+    row.relocalizations = s.tracking.relocalizations;
     row.replay_s = s.wall_time_s;
     Ok(())
 }
@@ -137,16 +145,20 @@ fn fill_row(
 /// The rows as a Markdown table.
 pub fn table(rows: &[CorpusRow]) -> String {
     let mut t = String::from(
-        "| log | scans | RMSE (m) | median | p95 | max | > 0.5 m | > 1 m | replay (s) |\n\
-         |---|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+        "| log | scans | RMSE (m) | median | p95 | max | > 0.5 m | > 1 m | losses | \
+         relocalizations | replay (s) |\n\
+         |---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
     );
     for r in rows {
         if let Some(e) = &r.error {
-            t.push_str(&format!("| {} | – | failed: {e} | | | | | | |\n", r.log));
+            t.push_str(&format!(
+                "| {} | – | failed: {e} | | | | | | | | |\n",
+                r.log
+            ));
             continue;
         }
         t.push_str(&format!(
-            "| {} | {} | {:.3} | {:.3} | {:.3} | {:.2} | {:.1} % | {:.1} % | {:.2} |\n",
+            "| {} | {} | {:.3} | {:.3} | {:.3} | {:.2} | {:.1} % | {:.1} % | {} | {} | {:.2} |\n",
             r.log,
             r.scans,
             r.rmse_m,
@@ -155,6 +167,8 @@ pub fn table(rows: &[CorpusRow]) -> String {
             r.max_m,
             100.0 * r.over_half_m,
             100.0 * r.over_1m,
+            r.losses,
+            r.relocalizations,
             r.replay_s
         ));
     }

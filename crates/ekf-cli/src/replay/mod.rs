@@ -15,6 +15,7 @@ pub mod inputs;
 pub mod outputs;
 mod sink;
 pub mod summary;
+pub mod tracking;
 
 use crate::config::{Config, MotionSource};
 use crate::mcap_io::{BagMessage, BagReader, MessageError, ReadError, WriteError};
@@ -28,8 +29,8 @@ use inputs::{
     gps_position, heading_from_imu, heading_from_magnetic_field, mount_from_tf, pose2,
     OdometryTracker, Skip, WheelTracker,
 };
-use lrf_lines::{LineMap, Localizer, LocalizerError, ScanStage, StageClock};
-use nalgebra::Matrix3;
+use lrf_lines::{LineMap, Localizer, LocalizerError, RelocalizeParams, ScanStage, StageClock};
+use nalgebra::{Matrix3, Point2};
 use outputs::OutputBag;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -548,6 +549,7 @@ pub(crate) struct Run<'a> {
     timer: StageTimer,
     map_written: bool,
     gps_gate: ChiSquareGate<f64>,
+    tracking: tracking::Tracking,
 }
 
 impl<'a> Run<'a> {
@@ -627,6 +629,7 @@ impl<'a> Run<'a> {
                 stages: Default::default(),
             },
             map_written: false,
+            tracking: tracking::Tracking::new(options.map.is_some()),
             gps_gate: ChiSquareGate::from_probability(config.gps.gate_probability, 2).map_err(
                 |error| LocalizerError::Config {
                     group: "gps",
@@ -661,8 +664,10 @@ impl<'a> Run<'a> {
             out,
             localizer,
             mut summary,
+            tracking,
             ..
         } = self;
+        summary.tracking.lost_at_end = tracking.lost_for;
         // Finish both outputs, then report the first error.
         let bag_finished = out.map_or(Ok(()), OutputBag::finish);
         let poses = poses.finish()?;
@@ -744,6 +749,7 @@ impl<'a> Run<'a> {
     fn motion(&mut self, message: &BagMessage) -> Result<(), ReplayError> {
         let now = message.log_time;
         let topic = message.topic();
+        self.tracking.motion(now);
         let step = match message.decode()? {
             AnyMessage::JointState(js) => {
                 let stamp = js.header.stamp.to_nanos().filter(|&s| s > 0).unwrap_or(now);
@@ -968,6 +974,8 @@ impl<'a> Run<'a> {
                 }
                 Err(e) => return Err(e.into()),
             };
+            let gap = self.tracking.gap_before_scan(now);
+            let report = self.check_tracking(&scan, now, gap, report)?;
             let l = &mut self.summary.lines;
             l.scans_used += 1;
             l.extracted += report.extracted as u64;
@@ -1021,6 +1029,100 @@ impl<'a> Run<'a> {
             }
         }
         self.record_pose(now)
+    }
+
+    /// The loss monitor after a scan's update ([`tracking`]): on a motion gap, or while
+    /// lost, searches the map and restarts the filter at a verified pose. Returns the
+    /// report of the update that stands.
+    fn check_tracking(
+        &mut self,
+        scan: &crate::ros2::sensor_msgs::LaserScan,
+        now: u64,
+        gap: bool,
+        report: lrf_lines::ScanReport,
+    ) -> Result<lrf_lines::ScanReport, ReplayError> {
+        if !self.tracking.enabled {
+            return Ok(report);
+        }
+        let lost_now = self.tracking.scan_fused(report.extracted, report.fused);
+        let counts = &mut self.summary.tracking;
+        if self.tracking.lost_for == 0 {
+            if gap || lost_now {
+                counts.losses += 1;
+                counts.motion_gaps += u64::from(gap);
+            } else {
+                return Ok(report);
+            }
+        } else if !gap && report.fused >= tracking::MIN_VERIFIED_LINES {
+            // Regained by tracking alone.
+            self.tracking.lost_for = 0;
+            return Ok(report);
+        }
+        let params = RelocalizeParams::default();
+        let pose = self.localizer.pose();
+        let cov = self.localizer.covariance();
+        let window = self
+            .tracking
+            .window(Point2::new(pose.x, pose.y), cov[(0, 0)] + cov[(1, 1)]);
+        counts.searches += 1;
+        let found = self.localizer.relocalize(&window, &params);
+        let found = found.filter(|r| r.is_unambiguous(&params));
+        let Some(found) = found else {
+            counts.refused += 1;
+            self.tracking.lost_for += 1;
+            return Ok(report);
+        };
+        let best = found.best.pose;
+        if (best.x - pose.x).hypot(best.y - pose.y) <= params.distinct_distance
+            && ekf_core::angle_diff(best.theta, pose.theta).abs() <= params.distinct_angle
+        {
+            // The estimate is where the search puts it.
+            self.tracking.lost_for = 0;
+            self.tracking.unfused = 0;
+            return Ok(report);
+        }
+        let saved = self.localizer.clone();
+        self.localizer
+            .reset(best, tracking::restart_covariance(&params))?;
+        let again = self.localizer.update_scan(&scan.as_scan());
+        let verified = match again {
+            Ok(r) if r.fused >= tracking::MIN_VERIFIED_LINES => Some(r),
+            _ => None,
+        };
+        let counts = &mut self.summary.tracking;
+        match verified {
+            Some(r) => {
+                counts.relocalizations += 1;
+                if counts.first_relocalizations_ns.len() < 10 {
+                    counts.first_relocalizations_ns.push(now);
+                }
+                self.tracking.lost_for = 0;
+                self.tracking.unfused = 0;
+                if let Some(out) = self.out.as_mut() {
+                    out.diagnostics(
+                        now,
+                        "ekf/relocalization",
+                        1,
+                        "relocalized: the filter restarted at the pose the map search found",
+                        vec![
+                            ("x", format!("{:.3}", best.x)),
+                            ("y", format!("{:.3}", best.y)),
+                            ("theta", format!("{:.4}", best.theta)),
+                            ("inliers", found.best.inliers.to_string()),
+                            ("score_m", format!("{:.2}", found.best.score)),
+                            ("runner_up_m", format!("{:.2}", found.runner_up)),
+                        ],
+                    )?;
+                }
+                Ok(r)
+            }
+            None => {
+                self.localizer = saved;
+                counts.refused += 1;
+                self.tracking.lost_for += 1;
+                Ok(report)
+            }
+        }
     }
 
     /// A pose for the TUM trajectory and the output bag.

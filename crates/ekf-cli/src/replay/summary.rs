@@ -185,6 +185,8 @@ pub struct ReplaySummary {
     pub compass: CompassCounts,
     /// GPS fix counts (both 0 unless `gps.fuse`).
     pub gps: GatedCounts,
+    /// Losses and relocalizations (`replay::tracking`).
+    pub tracking: super::tracking::TrackingCounts,
     /// Per-stage timings of the scan updates.
     pub timings: Timings,
     /// Wall-clock time of the replay (s).

@@ -13,6 +13,7 @@ pub use error::LocalizerError;
 use compass_lockout::{CompassLockout, Rejected};
 use map_errors::MapErrors;
 
+use crate::relocalize::{relocalize, Relocalization, RelocalizeParams, SearchWindow};
 use crate::{LaserScan, LineExtractor, LineMap, MatchResult, Matcher, ObservedLine, WallErrors};
 use alloc::vec::Vec;
 use ekf_core::{
@@ -560,6 +561,34 @@ impl Localizer {
             &self.config.laser_mount,
             &mut self.matches,
         );
+    }
+
+    /// Searches the map for the robot's pose from the last scan's lines alone, within
+    /// `window` ([`crate::relocalize()`]); the filter is left as it is.
+    pub fn relocalize(
+        &self,
+        window: &SearchWindow,
+        params: &RelocalizeParams,
+    ) -> Option<Relocalization> {
+        relocalize(
+            &self.lines,
+            &self.map,
+            &self.config.laser_mount,
+            window,
+            params,
+        )
+    }
+
+    /// Restarts the filter at `pose` with `covariance` (after a relocalization): the
+    /// state's history and a compass lock-out are forgotten; the map stays.
+    pub fn reset(
+        &mut self,
+        pose: Pose2<f64>,
+        covariance: Matrix3<f64>,
+    ) -> Result<(), LocalizerError> {
+        self.ekf = Ekf::new(pose, covariance).map_err(LocalizerError::Filter)?;
+        self.compass_lockout = CompassLockout::default();
+        Ok(())
     }
 
     /// The pose estimate `(x, y, θ)`.

@@ -1,0 +1,169 @@
+//! Loss detection and relocalization for the laser modes with a given map.
+//!
+//! # When the filter counts as lost
+//!
+//! * **A motion gap**: a scan arrives and the motion source has said nothing since the
+//!   scan before, although it spoke earlier in the log, or its last message is more than
+//!   [`MOTION_GAP_NS`] old. Whatever the robot did meanwhile is unknown (seattle turns 80°
+//!   in such a gap, orebro has almost no odometry at all): the laser decides.
+//! * **No line fused**: [`LOST_AFTER_SCANS`] scans in a row each extracted at least two
+//!   lines and fused none of them: the state no longer explains what the laser sees.
+//!
+//! # What is done then
+//!
+//! The map is searched for the pose from the scan's lines alone
+//! ([`lrf_lines::relocalize()`]) within a window around the current estimate: `3σ` of its
+//! position plus 2 m, plus 2 m for every further scan spent lost; after
+//! [`GLOBAL_AFTER_SCANS`] lost scans, the whole map. The best pose is taken only when it
+//! wins clearly over every pose elsewhere ([`lrf_lines::Relocalization::is_unambiguous`])
+//! and, once the filter is restarted there, the same scan's lines fuse at least
+//! [`MIN_VERIFIED_LINES`] of them; otherwise the filter is put back as it was. A
+//! relocalization within [`RelocalizeParams::distinct_distance`] and
+//! [`RelocalizeParams::distinct_angle`] of the estimate changes nothing.
+
+use lrf_lines::{RelocalizeParams, SearchWindow};
+use nalgebra::{Matrix3, Point2};
+use serde::Serialize;
+
+/// A motion source silent this long before a scan counts as a gap (ns).
+pub const MOTION_GAP_NS: u64 = 1_000_000_000;
+
+/// Scans in a row with lines but none fused before the filter counts as lost.
+pub const LOST_AFTER_SCANS: u32 = 3;
+
+/// Scans lost after which the search covers the whole map.
+pub const GLOBAL_AFTER_SCANS: u32 = 10;
+
+/// Lines the scan must fuse at the relocalized pose for it to be kept.
+pub const MIN_VERIFIED_LINES: usize = 2;
+
+/// Covariance the filter restarts with at a relocalized pose, before the scan's lines
+/// are fused: the search's inlier distance (0.15 m) and angle tolerance (3°) as 1σ.
+pub fn restart_covariance(params: &RelocalizeParams) -> Matrix3<f64> {
+    let sxy = params.inlier_distance;
+    let sth = params.angle_tolerance;
+    Matrix3::from_diagonal(&nalgebra::Vector3::new(sxy * sxy, sxy * sxy, sth * sth))
+}
+
+/// Losses and relocalizations of a replay, for its summary.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct TrackingCounts {
+    /// Scans that began a loss (a motion gap, or [`LOST_AFTER_SCANS`] unfused scans).
+    pub losses: u64,
+    /// Of those, motion gaps.
+    pub motion_gaps: u64,
+    /// Relocalizations that moved the filter.
+    pub relocalizations: u64,
+    /// Searches run.
+    pub searches: u64,
+    /// Searches whose best pose was ambiguous or failed verification.
+    pub refused: u64,
+    /// Scans the filter had been lost for when the log ended (0: tracking).
+    pub lost_at_end: u32,
+    /// Log times (ns) of the first relocalizations.
+    pub first_relocalizations_ns: Vec<u64>,
+}
+
+/// The loss monitor's state between scans.
+#[derive(Debug, Clone, Default)]
+pub struct Tracking {
+    /// Whether it runs: with a given map. A first-scan map (the paper's) is the room in
+    /// view and carries its own placement error in the filter, which a restart would
+    /// break, so there the filter is left as it is.
+    pub enabled: bool,
+    /// A motion message came since the last scan.
+    pub motion_since_scan: bool,
+    /// The motion source has spoken at all.
+    pub motion_seen: bool,
+    /// Time of the last motion message (ns).
+    pub last_motion_ns: Option<u64>,
+    /// Scans in a row with lines and none fused.
+    pub unfused: u32,
+    /// Scans spent lost (0: tracking).
+    pub lost_for: u32,
+}
+
+impl Tracking {
+    /// A monitor that runs if `enabled`.
+    pub fn new(enabled: bool) -> Self {
+        Self {
+            enabled,
+            ..Self::default()
+        }
+    }
+
+    /// A motion message at `t_ns`.
+    pub fn motion(&mut self, t_ns: u64) {
+        self.motion_since_scan = true;
+        self.motion_seen = true;
+        self.last_motion_ns = Some(t_ns);
+    }
+
+    /// Whether the scan at `t_ns` follows a motion gap; resets the per-scan flag.
+    pub fn gap_before_scan(&mut self, t_ns: u64) -> bool {
+        let silent = self.motion_seen && !self.motion_since_scan;
+        let stale = self
+            .last_motion_ns
+            .is_some_and(|m| t_ns.saturating_sub(m) > MOTION_GAP_NS);
+        self.motion_since_scan = false;
+        silent || stale
+    }
+
+    /// Notes a scan's outcome; returns whether the filter is lost now.
+    pub fn scan_fused(&mut self, extracted: usize, fused: usize) -> bool {
+        if fused > 0 {
+            self.unfused = 0;
+        } else if extracted >= 2 {
+            self.unfused += 1;
+        }
+        self.unfused >= LOST_AFTER_SCANS
+    }
+
+    /// The search window around `center` with position covariance trace `var_xy`.
+    pub fn window(&self, center: Point2<f64>, var_xy: f64) -> SearchWindow {
+        if self.lost_for >= GLOBAL_AFTER_SCANS {
+            return SearchWindow::global();
+        }
+        SearchWindow {
+            center,
+            radius: 3.0 * var_xy.max(0.0).sqrt() + 2.0 * f64::from(1 + self.lost_for),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_gap_is_a_scan_without_motion_since_the_last_one_or_a_stale_motion_source() {
+        let mut t = Tracking::default();
+        assert!(!t.gap_before_scan(5), "no motion source yet: no gap");
+        t.motion(10);
+        assert!(!t.gap_before_scan(20));
+        assert!(t.gap_before_scan(30), "no motion since the last scan");
+        t.motion(40);
+        assert!(t.gap_before_scan(40 + MOTION_GAP_NS + 1), "stale");
+    }
+
+    #[test]
+    fn the_filter_is_lost_after_three_scans_with_lines_and_none_fused() {
+        let mut t = Tracking::default();
+        assert!(!t.scan_fused(5, 0));
+        assert!(!t.scan_fused(1, 0), "one line: not counted");
+        assert!(!t.scan_fused(4, 0));
+        assert!(t.scan_fused(3, 0));
+        assert!(!t.scan_fused(3, 1), "a fused line ends it");
+    }
+
+    #[test]
+    fn the_window_grows_while_lost_then_covers_the_map() {
+        let mut t = Tracking::default();
+        let c = Point2::new(1.0, 2.0);
+        assert!((t.window(c, 0.04).radius - 2.6).abs() < 1e-12);
+        t.lost_for = 2;
+        assert!((t.window(c, 0.04).radius - 6.6).abs() < 1e-12);
+        t.lost_for = GLOBAL_AFTER_SCANS;
+        assert_eq!(t.window(c, 0.04).radius, f64::INFINITY);
+    }
+}
