@@ -43,6 +43,10 @@ enum Command {
         /// Start at the log's first reference pose instead of the configured initial pose.
         #[arg(long)]
         init_from_truth: bool,
+        /// Global localization: no initial pose; search the map (--map) from the first
+        /// scans and start where the search locks on (the summary says at which scan).
+        #[arg(long, conflicts_with = "init_from_truth", requires = "map")]
+        global: bool,
         /// Write the estimate, lines, map and diagnostics to this MCAP.
         #[arg(long)]
         out: Option<PathBuf>,
@@ -220,6 +224,9 @@ enum Command {
         /// Filter settings (TOML); default: the documented defaults.
         #[arg(long)]
         config: Option<PathBuf>,
+        /// Global localization: replay without an initial pose (ekf replay --global).
+        #[arg(long)]
+        global: bool,
         /// Print the rows as JSON instead of a table.
         #[arg(long)]
         json: bool,
@@ -742,6 +749,7 @@ fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
             map,
             mode,
             init_from_truth,
+            global,
             out,
             tum,
             json,
@@ -757,6 +765,7 @@ fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
                 out_mcap: out,
                 tum,
                 keep_trajectories: false,
+                global,
             };
             let bar = progress_bar();
             let mut progress = |done: u64, total: u64| {
@@ -846,6 +855,7 @@ fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
             paths,
             work_dir,
             config,
+            global,
             json,
         } => {
             let config = load_config(config.as_deref())?;
@@ -864,7 +874,7 @@ fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
             }
             let mut rows = Vec::new();
             for log in &logs {
-                let row = corpus::run_log(log, &config, &work_dir);
+                let row = corpus::run_log(log, &config, &work_dir, global);
                 if !json {
                     eprintln!("{}: {:.1} s", row.log, row.wall_time_s);
                 }
@@ -873,7 +883,7 @@ fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
             if json {
                 println!("{}", serde_json::to_string_pretty(&rows)?);
             } else {
-                print!("{}", corpus::table(&rows));
+                print!("{}", corpus::table(&rows, global));
             }
             if rows.iter().any(|r| r.error.is_some()) {
                 return Err("some logs could not be run (see the table)".into());

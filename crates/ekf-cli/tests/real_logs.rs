@@ -19,6 +19,7 @@ fn run(log: &str, mode: Mode, map: Option<&str>) -> ReplaySummary {
         out_mcap: None,
         tum: None,
         keep_trajectories: false,
+        global: false,
     };
     let outcome = replay(&testdata(log), &Config::default(), &options, &mut |_, _| {}).unwrap();
     assert!(outcome.failure.is_none(), "{:?}", outcome.failure);

@@ -76,12 +76,13 @@ fn parse_mode(mode: &str) -> PyResult<Mode> {
 /// code), writing no files. `config`: an `ekf` TOML config file, a dict of its groups, or
 /// None for the defaults. `mode`: `odometry`, `compass`, `laser` or `laser+compass`.
 /// `map`: a JSON line map; None builds the map from the first scan (the paper's §III).
-/// `init_from_truth`: start at the log's first reference pose.
+/// `init_from_truth`: start at the log's first reference pose. `global_localization`: no
+/// initial pose; the map is searched from the first scans (as `ekf replay --global`).
 ///
 /// Raises `OSError` if a file cannot be read, `ValueError` for an unusable log, config or
 /// map (the CLI's messages), also when the log breaks off part-way.
 #[pyfunction]
-#[pyo3(signature = (path, config = None, mode = "laser+compass", map = None, init_from_truth = false))]
+#[pyo3(signature = (path, config = None, mode = "laser+compass", map = None, init_from_truth = false, global_localization = false))]
 pub fn replay(
     py: Python<'_>,
     path: PathBuf,
@@ -89,6 +90,7 @@ pub fn replay(
     mode: &str,
     map: Option<PathBuf>,
     init_from_truth: bool,
+    global_localization: bool,
 ) -> PyResult<ReplayResult> {
     let config = load_config(config)?;
     let mode = parse_mode(mode)?;
@@ -103,6 +105,7 @@ pub fn replay(
         out_mcap: None,
         tum: None,
         keep_trajectories: true,
+        global: global_localization,
     };
     let outcome = py
         .detach(|| replay_log(&path, &config, &options, &mut |_, _| {}))

@@ -185,12 +185,23 @@ pub fn relocalize(
     observed.sort_by(|x, y| y.length.total_cmp(&x.length));
     observed.truncate(params.max_lines);
     let observed_length: f64 = observed.iter().map(|l| l.length).sum();
-    let index = WallIndex::new(map, params.inlier_distance);
+    // A wall can hold a seen line only if it comes within the line's range of the window.
+    let reach = window.radius
+        + observed
+            .iter()
+            .map(|l| l.a.coords.norm().max(l.b.coords.norm()))
+            .fold(0.0, f64::max);
+    let index = WallIndex::new(map, params.inlier_distance, |w| {
+        distance_to_segment(&window.center, w) <= reach
+    });
+    // Over the whole map, pairs with the longest line alone: the search stays within
+    // its budget on maps of thousands of walls.
+    let anchors = if window.radius.is_finite() { 2 } else { 1 };
 
     let mut hypotheses: Vec<Hypothesis> = Vec::new();
     let mut seen: BTreeSet<(i64, i64, i64)> = BTreeSet::new();
     let mut scored = 0;
-    for (i, oi) in observed.iter().enumerate().take(2) {
+    for (i, oi) in observed.iter().enumerate().take(anchors) {
         for oj in observed.iter().skip(i + 1) {
             let pair_angle = direction_diff(oj.angle, oi.angle);
             if pair_angle.abs() < params.min_pair_angle {
@@ -211,7 +222,10 @@ pub fn relocalize(
                         let Some(pose) = pose_from_pair(theta, oi, wa, oj, wb) else {
                             continue;
                         };
-                        if (Point2::new(pose.x, pose.y) - window.center).norm() > window.radius {
+                        if (Point2::new(pose.x, pose.y) - window.center).norm() > window.radius
+                            || !on_wall(&pose, oi, wa, params)
+                            || !on_wall(&pose, oj, wb, params)
+                        {
                             continue;
                         }
                         let key = (
@@ -263,11 +277,13 @@ struct WallIndex {
 }
 
 impl WallIndex {
-    fn new(map: &LineMap, margin: f64) -> Self {
+    /// The walls of `map` that pass `keep`, by direction, and all walls by place.
+    fn new(map: &LineMap, margin: f64, keep: impl Fn(&MapSegment) -> bool) -> Self {
         let mut by_angle: Vec<(f64, usize)> = map
             .segments
             .iter()
             .enumerate()
+            .filter(|(_, s)| keep(s))
             .map(|(i, s)| (direction_angle(&s.start, &s.end), i))
             .collect();
         by_angle.sort_by(|x, y| x.0.total_cmp(&y.0));
@@ -312,6 +328,13 @@ impl WallIndex {
     }
 }
 
+/// Distance from `p` to the segment `w` (m).
+fn distance_to_segment(p: &Point2<f64>, w: &MapSegment) -> f64 {
+    let d = w.end - w.start;
+    let t = ((p - w.start).dot(&d) / d.norm_squared()).clamp(0.0, 1.0);
+    (w.start + d * t - p).norm()
+}
+
 fn cell(p: &Point2<f64>) -> (i64, i64) {
     (
         libm::floor(p.x / CELL) as i64,
@@ -348,11 +371,48 @@ fn normal(s: &MapSegment) -> Vector2<f64> {
     Vector2::new(libm::cos(s.line.beta), libm::sin(s.line.beta))
 }
 
-/// How well the scan fits at `pose`: each observed line is an inlier of the wall it lies
-/// on best (both end points within the inlier distance, direction within the tolerance,
-/// overlapping by half its length), and adds its length weighted by how closely it lies
-/// there, `exp(−(d_a² + d_b²) / (2 σ²))` with `σ` half the inlier distance, so that of
-/// two poses a few centimetres apart the one that fits better scores higher.
+/// How closely the observed segment `a`–`b` (world frame, length `length`) lies on
+/// `wall`: `exp(−(d_a² + d_b²) / (2 σ²))` of its end points' normal distances, with `σ`
+/// half the inlier distance; `None` unless both end points are within the inlier
+/// distance, the directions agree within the tolerance and the segment overlaps the wall
+/// by half its length.
+fn fit(
+    wall: &MapSegment,
+    a: &Point2<f64>,
+    b: &Point2<f64>,
+    length: f64,
+    params: &RelocalizeParams,
+) -> Option<f64> {
+    let (da, db) = (wall.line.signed_distance(a), wall.line.signed_distance(b));
+    if da.abs() > params.inlier_distance || db.abs() > params.inlier_distance {
+        return None;
+    }
+    if direction_diff(
+        direction_angle(a, b),
+        direction_angle(&wall.start, &wall.end),
+    )
+    .abs()
+        > params.angle_tolerance
+    {
+        return None;
+    }
+    let dir = line_direction(&wall.line);
+    let (s0, s1) = (dir.dot(&wall.start.coords), dir.dot(&wall.end.coords));
+    let (o0, o1) = (dir.dot(&a.coords), dir.dot(&b.coords));
+    let overlap = o0.max(o1).min(s0.max(s1)) - o0.min(o1).max(s0.min(s1));
+    let sigma = 0.5 * params.inlier_distance;
+    (overlap >= 0.5 * length).then(|| libm::exp(-(da * da + db * db) / (2.0 * sigma * sigma)))
+}
+
+/// Whether observed line `o` lies on `wall` with the robot at `pose`.
+fn on_wall(pose: &Pose2<f64>, o: &RobotLine, wall: &MapSegment, params: &RelocalizeParams) -> bool {
+    let (a, b) = (pose.transform_point(&o.a), pose.transform_point(&o.b));
+    fit(wall, &a, &b, o.length, params).is_some()
+}
+
+/// How well the scan fits at `pose`: each observed line that lies on a wall ([`fit`]) is
+/// an inlier and adds its length weighted by its best fit, so that of two poses a few
+/// centimetres apart the one that fits better scores higher.
 fn score(
     pose: &Pose2<f64>,
     observed: &[RobotLine],
@@ -365,39 +425,18 @@ fn score(
         inliers: 0,
         score: 0.0,
     };
-    let sigma = 0.5 * params.inlier_distance;
     for o in observed {
         let (a, b) = (pose.transform_point(&o.a), pose.transform_point(&o.b));
-        let angle = direction_angle(&a, &b);
-        let middle = nalgebra::center(&a, &b);
-        let fit = index
-            .near(&middle)
+        let best = index
+            .near(&nalgebra::center(&a, &b))
             .iter()
-            .filter_map(|&w| {
-                let w = &map.segments[w];
-                let (da, db) = (w.line.signed_distance(&a), w.line.signed_distance(&b));
-                if da.abs() > params.inlier_distance || db.abs() > params.inlier_distance {
-                    return None;
-                }
-                if direction_diff(angle, direction_angle(&w.start, &w.end)).abs()
-                    > params.angle_tolerance
-                {
-                    return None;
-                }
-                let dir = line_direction(&w.line);
-                let (s0, s1) = (dir.dot(&w.start.coords), dir.dot(&w.end.coords));
-                let (lo, hi) = (s0.min(s1), s0.max(s1));
-                let (o0, o1) = (dir.dot(&a.coords), dir.dot(&b.coords));
-                let overlap = o0.max(o1).min(hi) - o0.min(o1).max(lo);
-                (overlap >= 0.5 * o.length)
-                    .then(|| libm::exp(-(da * da + db * db) / (2.0 * sigma * sigma)))
-            })
+            .filter_map(|&w| fit(&map.segments[w], &a, &b, o.length, params))
             .fold(None, |best: Option<f64>, f| {
                 Some(best.map_or(f, |b| b.max(f)))
             });
-        if let Some(fit) = fit {
+        if let Some(best) = best {
             h.inliers += 1;
-            h.score += o.length * fit;
+            h.score += o.length * best;
         }
     }
     h

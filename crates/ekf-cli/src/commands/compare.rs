@@ -246,6 +246,7 @@ pub fn compare(
             out_mcap: None,
             tum: None,
             keep_trajectories: true,
+            global: false,
         };
         let outcome = match replay(log, config, &replay_options, &mut |_, _| {}) {
             Err(e) => ModeOutcome::Unavailable {

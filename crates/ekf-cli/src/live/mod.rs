@@ -453,6 +453,7 @@ impl<'a> Live<'a> {
             out_mcap: options.record.clone(),
             tum: None,
             keep_trajectories: false,
+            global: false,
         };
         let name = options
             .record

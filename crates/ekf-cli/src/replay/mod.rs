@@ -88,6 +88,9 @@ pub struct ReplayOptions {
     pub map: Option<PathBuf>,
     /// Start at the first reference pose instead of `config.initial`.
     pub init_from_truth: bool,
+    /// Global localization: no initial pose; the map is searched from the first scans
+    /// ([`tracking`]) and the filter starts where the search locks on. Needs a map.
+    pub global: bool,
     /// Output bag.
     pub out_mcap: Option<PathBuf>,
     /// Output TUM trajectory.
@@ -100,6 +103,9 @@ pub struct ReplayOptions {
 /// Why a replay could not start or could not finish.
 #[derive(Debug, thiserror::Error)]
 pub enum ReplayError {
+    /// Global localization was asked for without a map to search.
+    #[error("--global needs a map (--map MAP.json): there is nothing to search without one")]
+    GlobalNeedsMap,
     /// The log could not be read.
     #[error(transparent)]
     Read(#[from] ReadError),
@@ -578,7 +584,10 @@ impl<'a> Run<'a> {
         summary.laser_mount = [mount.x, mount.y, mount.theta];
 
         // Initial state.
-        let (start_ns, initial) = if options.init_from_truth {
+        if options.global && options.map.is_none() {
+            return Err(ReplayError::GlobalNeedsMap);
+        }
+        let (start_ns, initial) = if options.init_from_truth && !options.global {
             let (t0, pose) = preamble
                 .first_reference
                 .ok_or_else(|| ReplayError::NoReference {
@@ -629,7 +638,11 @@ impl<'a> Run<'a> {
                 stages: Default::default(),
             },
             map_written: false,
-            tracking: tracking::Tracking::new(options.map.is_some()),
+            tracking: if options.global {
+                tracking::Tracking::global()
+            } else {
+                tracking::Tracking::new(options.map.is_some())
+            },
             gps_gate: ChiSquareGate::from_probability(config.gps.gate_probability, 2).map_err(
                 |error| LocalizerError::Config {
                     group: "gps",
@@ -974,6 +987,7 @@ impl<'a> Run<'a> {
                 }
                 Err(e) => return Err(e.into()),
             };
+            self.tracking.scans += 1;
             let gap = self.tracking.gap_before_scan(now);
             let report = self.check_tracking(&scan, now, gap, report)?;
             let l = &mut self.summary.lines;
@@ -1053,7 +1067,7 @@ impl<'a> Run<'a> {
             } else {
                 return Ok(report);
             }
-        } else if !gap && report.fused >= tracking::MIN_VERIFIED_LINES {
+        } else if !gap && !self.tracking.unlocked && report.fused >= tracking::MIN_VERIFIED_LINES {
             // Regained by tracking alone.
             self.tracking.lost_for = 0;
             return Ok(report);
@@ -1061,9 +1075,13 @@ impl<'a> Run<'a> {
         let params = RelocalizeParams::default();
         let pose = self.localizer.pose();
         let cov = self.localizer.covariance();
-        let window = self
+        let Some(window) = self
             .tracking
-            .window(Point2::new(pose.x, pose.y), cov[(0, 0)] + cov[(1, 1)]);
+            .window(Point2::new(pose.x, pose.y), cov[(0, 0)] + cov[(1, 1)])
+        else {
+            self.tracking.lost_for += 1;
+            return Ok(report);
+        };
         counts.searches += 1;
         let found = self.localizer.relocalize(&window, &params);
         let found = found.filter(|r| r.is_unambiguous(&params));
@@ -1077,8 +1095,7 @@ impl<'a> Run<'a> {
             && ekf_core::angle_diff(best.theta, pose.theta).abs() <= params.distinct_angle
         {
             // The estimate is where the search puts it.
-            self.tracking.lost_for = 0;
-            self.tracking.unfused = 0;
+            self.tracking.locked(&mut self.summary.tracking);
             return Ok(report);
         }
         let saved = self.localizer.clone();
@@ -1096,8 +1113,7 @@ impl<'a> Run<'a> {
                 if counts.first_relocalizations_ns.len() < 10 {
                     counts.first_relocalizations_ns.push(now);
                 }
-                self.tracking.lost_for = 0;
-                self.tracking.unfused = 0;
+                self.tracking.locked(counts);
                 if let Some(out) = self.out.as_mut() {
                     out.diagnostics(
                         now,
@@ -1152,6 +1168,7 @@ mod tests {
             out_mcap: None,
             tum: None,
             keep_trajectories: false,
+            global: false,
         };
         let preamble = Preamble {
             scan_frame: None,

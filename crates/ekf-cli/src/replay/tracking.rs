@@ -34,6 +34,9 @@ pub const LOST_AFTER_SCANS: u32 = 3;
 /// Scans lost after which the search covers the whole map.
 pub const GLOBAL_AFTER_SCANS: u32 = 10;
 
+/// While lost over the whole map, the search runs on every this many scans.
+pub const GLOBAL_SEARCH_EVERY: u32 = 3;
+
 /// Lines the scan must fuse at the relocalized pose for it to be kept.
 pub const MIN_VERIFIED_LINES: usize = 2;
 
@@ -62,6 +65,8 @@ pub struct TrackingCounts {
     pub lost_at_end: u32,
     /// Log times (ns) of the first relocalizations.
     pub first_relocalizations_ns: Vec<u64>,
+    /// With global localization, the scan (1-based) at which the search locked on.
+    pub locked_on_scan: Option<u64>,
 }
 
 /// The loss monitor's state between scans.
@@ -81,6 +86,10 @@ pub struct Tracking {
     pub unfused: u32,
     /// Scans spent lost (0: tracking).
     pub lost_for: u32,
+    /// Started without a pose (global localization) and not yet locked on.
+    pub unlocked: bool,
+    /// Laser scans seen.
+    pub scans: u64,
 }
 
 impl Tracking {
@@ -90,6 +99,26 @@ impl Tracking {
             enabled,
             ..Self::default()
         }
+    }
+
+    /// A monitor for global localization: lost from the start, searching the whole map.
+    pub fn global() -> Self {
+        Self {
+            enabled: true,
+            unlocked: true,
+            lost_for: GLOBAL_AFTER_SCANS,
+            ..Self::default()
+        }
+    }
+
+    /// The search found the filter's pose (or moved the filter there): tracking again.
+    pub fn locked(&mut self, counts: &mut TrackingCounts) {
+        if self.unlocked {
+            counts.locked_on_scan = Some(self.scans);
+            self.unlocked = false;
+        }
+        self.lost_for = 0;
+        self.unfused = 0;
     }
 
     /// A motion message at `t_ns`.
@@ -119,15 +148,18 @@ impl Tracking {
         self.unfused >= LOST_AFTER_SCANS
     }
 
-    /// The search window around `center` with position covariance trace `var_xy`.
-    pub fn window(&self, center: Point2<f64>, var_xy: f64) -> SearchWindow {
+    /// The search window around `center` with position covariance trace `var_xy`; `None`
+    /// on the scans a search of the whole map skips (it runs every
+    /// [`GLOBAL_SEARCH_EVERY`]th lost scan, to bound its cost on large maps).
+    pub fn window(&self, center: Point2<f64>, var_xy: f64) -> Option<SearchWindow> {
         if self.lost_for >= GLOBAL_AFTER_SCANS {
-            return SearchWindow::global();
+            let every = (self.lost_for - GLOBAL_AFTER_SCANS).is_multiple_of(GLOBAL_SEARCH_EVERY);
+            return every.then(SearchWindow::global);
         }
-        SearchWindow {
+        Some(SearchWindow {
             center,
             radius: 3.0 * var_xy.max(0.0).sqrt() + 2.0 * f64::from(1 + self.lost_for),
-        }
+        })
     }
 }
 
@@ -160,10 +192,14 @@ mod tests {
     fn the_window_grows_while_lost_then_covers_the_map() {
         let mut t = Tracking::default();
         let c = Point2::new(1.0, 2.0);
-        assert!((t.window(c, 0.04).radius - 2.6).abs() < 1e-12);
+        assert!((t.window(c, 0.04).unwrap().radius - 2.6).abs() < 1e-12);
         t.lost_for = 2;
-        assert!((t.window(c, 0.04).radius - 6.6).abs() < 1e-12);
+        assert!((t.window(c, 0.04).unwrap().radius - 6.6).abs() < 1e-12);
         t.lost_for = GLOBAL_AFTER_SCANS;
-        assert_eq!(t.window(c, 0.04).radius, f64::INFINITY);
+        assert_eq!(t.window(c, 0.04).unwrap().radius, f64::INFINITY);
+        t.lost_for += 1;
+        assert_eq!(t.window(c, 0.04), None, "the whole map, every third scan");
+        t.lost_for += GLOBAL_SEARCH_EVERY - 1;
+        assert!(t.window(c, 0.04).is_some());
     }
 }
