@@ -26,6 +26,31 @@ step "cargo doc"
 RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps
 
 # ---------------------------------------------------------------------------------------
+# The real-log benchmark: every shared CARMEN log imported, mapped from its reference and
+# replayed laser-only with the defaults, from the first reference pose and with --global;
+# tests/corpus/check.py holds the bounds. The release binary, as users run it.
+corpus_dir=""
+for d in ../shared/data ../../shared/data; do
+    [ -d "$d/carmen" ] && corpus_dir=$d && break
+done
+if [ -n "$corpus_dir" ]; then
+    step "ekf corpus on $corpus_dir (release build)"
+    cargo build --release -p ekf-cli --bin ekf
+    corpus_out=$(mktemp -d)
+    cargo run --release -q -p ekf-cli --bin ekf -- corpus "$corpus_dir/aces-corrected.log.gz" "$corpus_dir/carmen" \
+        --work-dir "$corpus_out/tracked" --json >"$corpus_out/tracked.json"
+    cargo run --release -q -p ekf-cli --bin ekf -- corpus "$corpus_dir/aces-corrected.log.gz" "$corpus_dir/carmen" \
+        --work-dir "$corpus_out/global" --global --json >"$corpus_out/global.json"
+    "${PYTHON:-python3}" tests/corpus/check.py "$corpus_out/tracked.json" "$corpus_out/global.json"
+    rm -rf "$corpus_out"
+elif [ "${EKF_REQUIRE_DATA:-0}" = 1 ]; then
+    echo "error: shared/data/carmen not found beside the repository (EKF_REQUIRE_DATA=1)" >&2
+    exit 1
+else
+    step "ekf corpus: skipped (no shared/data/carmen beside the repository)"
+fi
+
+# ---------------------------------------------------------------------------------------
 # Python checks: readers we did not write (mcap, mcap-ros2-support, rosbags) decode what
 # `ekf` writes, and the Python module ekf_loc agrees with FilterPy and with `ekf`. A venv
 # at .venv is created on first use and reused; the pinned requirements are reinstalled

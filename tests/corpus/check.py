@@ -1,0 +1,60 @@
+"""Bounds on `ekf corpus --json` over the shared CARMEN logs (default config, laser only,
+maps from the reference): run by scripts/test-all.sh with the release binary.
+
+The bounds are of two kinds. Where the issue's target holds today, the target itself
+(position RMSE, share of scans over 1 m, lock-on within 20 scans). Where it does not yet
+(docs/RESULTS.md says which and why), a regression bound a little above what is
+measured, so that a change that loses more scans fails here.
+
+Usage: python3 check.py TRACKED.json GLOBAL.json
+"""
+
+import json
+import sys
+
+# log: (max RMSE m, max share of scans over 1 m)
+TRACKED = {
+    "aces": (0.10, 0.01),
+    "edmonton": (0.15, 0.01),
+    "fhw": (0.079, 0.01),
+    "freiburg-101": (0.075, 0.01),
+    "seattle": (0.15, 0.01),
+    # Not yet at the target (docs/RESULTS.md): regression bounds.
+    "csail": (2.0, 0.45),
+    "orebro": (4.0, 0.42),
+    "freiburg-campus": (8.0, 0.56),
+    "infinite-corridor": (70.0, 0.68),
+}
+
+# With --global (started 1 km off): lock-on within this many scans.
+LOCK_WITHIN = {"aces": 20, "edmonton": 20, "fhw": 20, "freiburg-101": 20}
+
+
+def main() -> int:
+    tracked = {r["log"]: r for r in json.load(open(sys.argv[1]))}
+    global_ = {r["log"]: r for r in json.load(open(sys.argv[2]))}
+    failures = []
+    for log, (rmse, over) in TRACKED.items():
+        r = tracked.get(log)
+        if r is None or r["error"]:
+            failures.append(f"{log}: not run ({r and r['error']})")
+            continue
+        if r["rmse_m"] > rmse:
+            failures.append(f"{log}: RMSE {r['rmse_m']:.3f} m > {rmse} m")
+        if r["over_1m"] > over:
+            failures.append(f"{log}: {100 * r['over_1m']:.1f} % over 1 m > {100 * over:.1f} %")
+        if r["replay_s"] > 30:
+            failures.append(f"{log}: replay took {r['replay_s']:.1f} s")
+    for log, within in LOCK_WITHIN.items():
+        r = global_.get(log)
+        lock = r and r["locked_on_scan"]
+        if not lock or lock > within:
+            failures.append(f"{log} --global: locked on at scan {lock}, not within {within}")
+    for f in failures:
+        print("FAIL", f)
+    print(f"corpus: {len(TRACKED) + len(LOCK_WITHIN) - len(failures)} passed, {len(failures)} failed")
+    return 1 if failures else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
