@@ -82,14 +82,20 @@ fn assert_regained(outcome: &ReplayOutcome, what: &str, max_share_over_1m: f64) 
         t
     );
     assert!(t.losses >= 1, "{what}: the loss is noticed: {t:?}");
-    assert!(t.relocalizations >= 1, "{what}: the laser finds the robot: {t:?}");
+    assert!(
+        t.relocalizations >= 1,
+        "{what}: the laser finds the robot: {t:?}"
+    );
     assert_eq!(t.lost_at_end, 0, "{what}: tracking at the end");
     assert!(a.share_over_1m <= max_share_over_1m, "{what}: {a:?}");
     let last = *t.first_relocalizations_ns.last().expect("a relocalization");
     let after = errors_from(outcome, last);
     assert!(after.len() > 100, "{what}: {} scans after it", after.len());
     let worst = after.iter().copied().fold(0.0, f64::max);
-    assert!(worst < 1.0, "{what}: {worst:.2} m off after the relocalization");
+    assert!(
+        worst < 1.0,
+        "{what}: {worst:.2} m off after the relocalization"
+    );
 }
 
 #[test]
@@ -101,7 +107,11 @@ fn a_two_metre_jump_in_the_odometry_is_noticed_and_corrected() {
     // reset re-anchors the chain, so this is one jump of 2 m.
     let (from, to) = (scans[200] + 2, scans[201]);
     let odoms: Vec<usize> = (from..to).filter(|&i| lines[i][0] == "ODOM").collect();
-    assert!(odoms.len() >= 4, "{} odometry records between the scans", odoms.len());
+    assert!(
+        odoms.len() >= 4,
+        "{} odometry records between the scans",
+        odoms.len()
+    );
     for &i in &odoms[odoms.len() / 2..] {
         let x: f64 = lines[i][1].parse().unwrap();
         lines[i][1] = format!("{}", x + 2.0);
