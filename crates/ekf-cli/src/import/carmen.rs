@@ -21,15 +21,25 @@
 //!   [`ImportStats`](super::ImportStats) and skipped.
 //!
 //! Ranges are kept as they are: readings at `range_max` are invalid and the line
-//! extractor drops them. `range_min` is 0.
+//! extractor drops them. `range_min` is 0. A `FLASER` scan's `range_max` comes from the
+//! data when the readings saturate (see `range_limit.rs`), else as said above.
+//!
+//! # Timestamps
+//!
+//! Stamps that are negative, zero, below a nanosecond or out of order are repaired, and a
+//! clock broken throughout is replaced by file order (`clock.rs`); every repair is counted
+//! in [`ImportStats::time_repairs`](super::ImportStats::time_repairs), and
+//! [`CarmenOptions::strict`] refuses such a log instead. Exact repeats of the `ODOM` line
+//! before are left out and counted in [`ImportStats::duplicates`](super::ImportStats).
 //!
 //! # The "corrected" flavour
 //!
 //! A corrected log is the output of a grid-SLAM run: each scan's robot pose is the
-//! SLAM-corrected pose, and the `ODOM` right after a scan is *reset* to it. Checked on the
-//! ACES log: a reset is exactly the first `ODOM` after a scan whose timestamp is 0 and whose
-//! pose equals the scan's robot pose; all 440 scans are followed by one, and no other
-//! `ODOM` has timestamp 0. The importer then
+//! SLAM-corrected pose, and the `ODOM` right after a scan is *reset* to it. A reset is
+//! recognised by what it is: the first `ODOM` after a scan whose pose equals the scan's
+//! robot pose (unless it also repeats the `ODOM` before the scan with a good stamp: a
+//! plain log's robot standing still). Its timestamp says nothing: 0 in ACES, negative,
+//! `8.97e-67` or far off in other logs of the family, and it is ignored. The importer then
 //!
 //! * yields each scan's robot pose as a [`Reference`] at the scan's time;
 //! * re-chains the raw odometry: an accumulated pose starts at the first `ODOM`; for each

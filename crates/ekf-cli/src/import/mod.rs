@@ -21,8 +21,10 @@
 //! Common rules:
 //! * times are nanoseconds taken from the log's own timestamps, converted from the decimal
 //!   text without going through floating point;
-//! * records come in file order. Time going backwards is not sorted away but counted in
-//!   [`ImportStats::backwards_time`]; equal stamps are normal (a scan and its reference);
+//! * records come in file order. CARMEN stamps that need it are repaired from their
+//!   neighbours (counted in [`ImportStats::time_repairs`]); time still going backwards
+//!   (MRPT) is not sorted away but counted in [`ImportStats::backwards_time`]; equal
+//!   stamps are normal (a scan and its reference);
 //! * the first bad line ends the iteration with an error naming the line, the record
 //!   type and the field, after every record before it was yielded.
 
