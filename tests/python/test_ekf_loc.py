@@ -237,6 +237,23 @@ def tum_rows(path):
     return rows
 
 
+def test_replay_with_global_localization_finds_the_robot_and_agrees_with_the_cli(ekf_bin, tmp_path):
+    # Started 1 km off and a quarter turn wrong: only the map search can put it right.
+    config = {"initial": {"x": 1000.0, "y": 1000.0, "theta": math.pi / 2}}
+    toml = tmp_path / "far.toml"
+    toml.write_text("[initial]\nx = 1000.0\ny = 1000.0\ntheta = 1.5707963267948966\n")
+    result = ekf_loc.replay(ACES, config=config, mode="laser", map=ACES_MAP,
+                            global_localization=True)
+    tracking = result.summary["tracking"]
+    assert 1 <= tracking["locked_on_scan"] <= 20
+    assert result.summary["accuracy"]["share_over_1m"] <= 0.05
+    cli = run_ekf(ekf_bin, "replay", ACES, "--map", ACES_MAP, "--mode", "laser",
+                  "--global", "--config", toml)
+    assert cli["tracking"] == tracking
+    with pytest.raises(ValueError, match="--global needs a map"):
+        ekf_loc.replay(ACES, mode="laser", global_localization=True)
+
+
 @pytest.mark.parametrize("mode", ["laser+compass", "odometry"])
 def test_replay_returns_the_poses_of_ekf_replay_tum(ekf_bin, tmp_path, mode):
     tum = tmp_path / "cli.tum"

@@ -395,9 +395,13 @@ def replay(
     mode: str = "laser+compass",
     map: Optional[_PathLike] = None,
     init_from_truth: bool = False,
+    global_localization: bool = False,
 ) -> ReplayResult:
     """``ekf replay`` on a ROS 2 bag (same code), writing no files. ``mode``: odometry,
-    compass, laser or laser+compass. ``map``: JSON line map (None: the first scan)."""
+    compass, laser or laser+compass. ``map``: JSON line map (None: the first scan).
+    ``global_localization``: no initial pose, the map is searched from the first scans
+    (``ekf replay --global``; needs ``map``); ``summary["tracking"]["locked_on_scan"]``
+    says when it locked on."""
 
 @final
 class SimulationResult:
