@@ -1045,9 +1045,10 @@ impl<'a> Run<'a> {
         self.record_pose(now)
     }
 
-    /// The loss monitor after a scan's update ([`tracking`]): on a motion gap, or while
-    /// lost, searches the map and restarts the filter at a verified pose. Returns the
-    /// report of the update that stands.
+    /// The loss monitor after a scan's update ([`tracking`]): on a motion gap, while lost,
+    /// or while the heading is less certain than the search resolves, searches the map
+    /// and restarts the filter at a verified pose. Returns the report of the update that
+    /// stands.
     fn check_tracking(
         &mut self,
         scan: &crate::ros2::sensor_msgs::LaserScan,
@@ -1060,11 +1061,13 @@ impl<'a> Run<'a> {
         }
         let lost_now = self.tracking.scan_fused(report.extracted, report.fused);
         let counts = &mut self.summary.tracking;
+        let params = RelocalizeParams::default();
+        let uncertain = tracking::uncertain(self.localizer.covariance(), &params);
         if self.tracking.lost_for == 0 {
             if gap || lost_now {
                 counts.losses += 1;
                 counts.motion_gaps += u64::from(gap);
-            } else {
+            } else if !uncertain {
                 return Ok(report);
             }
         } else if !gap && !self.tracking.unlocked && report.fused >= tracking::MIN_VERIFIED_LINES {
@@ -1072,7 +1075,6 @@ impl<'a> Run<'a> {
             self.tracking.lost_for = 0;
             return Ok(report);
         }
-        let params = RelocalizeParams::default();
         let pose = self.localizer.pose();
         let cov = self.localizer.covariance();
         let Some(window) = self

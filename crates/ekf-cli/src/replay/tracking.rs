@@ -9,6 +9,15 @@
 //! * **No line fused**: [`LOST_AFTER_SCANS`] scans in a row each extracted at least two
 //!   lines and fused none of them: the state no longer explains what the laser sees.
 //!
+//! # When the filter is checked
+//!
+//! While its heading's standard deviation is larger than the search's angle tolerance
+//! ([`RelocalizeParams::angle_tolerance`], 3°), a scan's lines locate the robot better
+//! than the filter does: the same search runs, and a clear, verified answer elsewhere
+//! restarts the filter there (a relocalization without a loss). Odometry that turns
+//! worse than its noise model says (csail's is off by 7.5° a scan step) is caught so
+//! before nearest-neighbour matching locks onto the wrong walls.
+//!
 //! # What is done then
 //!
 //! The map is searched for the pose from the scan's lines alone
@@ -48,6 +57,12 @@ pub fn restart_covariance(params: &RelocalizeParams) -> Matrix3<f64> {
     Matrix3::from_diagonal(&nalgebra::Vector3::new(sxy * sxy, sxy * sxy, sth * sth))
 }
 
+/// Whether the filter's heading (covariance `p`) is less certain than the search
+/// resolves: `σ_θ > params.angle_tolerance`.
+pub fn uncertain(p: &Matrix3<f64>, params: &RelocalizeParams) -> bool {
+    p[(2, 2)].max(0.0).sqrt() > params.angle_tolerance
+}
+
 /// Losses and relocalizations of a replay, for its summary.
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
 pub struct TrackingCounts {
@@ -55,7 +70,8 @@ pub struct TrackingCounts {
     pub losses: u64,
     /// Of those, motion gaps.
     pub motion_gaps: u64,
-    /// Relocalizations that moved the filter.
+    /// Relocalizations that moved the filter (after a loss, or a check while the heading
+    /// was uncertain).
     pub relocalizations: u64,
     /// Searches run.
     pub searches: u64,
@@ -186,6 +202,20 @@ mod tests {
         assert!(!t.scan_fused(4, 0));
         assert!(t.scan_fused(3, 0));
         assert!(!t.scan_fused(3, 1), "a fused line ends it");
+    }
+
+    #[test]
+    fn a_heading_less_certain_than_the_search_resolves_is_checked() {
+        let params = RelocalizeParams::default();
+        let var = |deg: f64| {
+            Matrix3::from_diagonal(&nalgebra::Vector3::new(
+                0.01,
+                0.01,
+                deg.to_radians().powi(2),
+            ))
+        };
+        assert!(!uncertain(&var(2.9), &params));
+        assert!(uncertain(&var(3.1), &params));
     }
 
     #[test]
