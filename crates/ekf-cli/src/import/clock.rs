@@ -339,7 +339,13 @@ mod tests {
         }
     }
 
-    fn run(stamps: &[RawStamp], strict: bool) -> Result<(Vec<u64>, TimeRepairs), ImportError> {
+    /// Times and repairs of `stamps` (lines 1, 2, …), the clock judged on the first
+    /// `judged` of them.
+    fn run_judged(
+        stamps: &[RawStamp],
+        judged: usize,
+        strict: bool,
+    ) -> Result<(Vec<u64>, TimeRepairs), ImportError> {
         let entries: Vec<Entry> = stamps
             .iter()
             .enumerate()
@@ -347,7 +353,7 @@ mod tests {
             .collect();
         let mut clock = ClockRepair::new(strict);
         let mut out = Output::default();
-        clock.judge(&entries, &mut out)?;
+        clock.judge(&entries[..judged], &mut out)?;
         for e in entries {
             clock.place(e, &mut out)?;
         }
@@ -356,6 +362,10 @@ mod tests {
             out.queue.iter().map(ImportRecord::t_ns).collect(),
             out.stats.time_repairs,
         ))
+    }
+
+    fn run(stamps: &[RawStamp], strict: bool) -> Result<(Vec<u64>, TimeRepairs), ImportError> {
+        run_judged(stamps, stamps.len(), strict)
     }
 
     const S: u64 = 1_000_000_000;
@@ -452,20 +462,8 @@ mod tests {
         let mut stamps = vec![Valid(S)];
         stamps.extend(std::iter::repeat_n(Zero, PROBE_RECORDS + 1));
         stamps.extend([Valid(S + 10 * SYNTHETIC_STEP_NS)]);
-        // The probe window itself is good: judge on the first two only.
-        let entries: Vec<Entry> = stamps
-            .iter()
-            .enumerate()
-            .map(|(i, &s)| entry(i as u64 + 1, s))
-            .collect();
-        let mut clock = ClockRepair::new(false);
-        let mut out = Output::default();
-        clock.judge(&entries[..1], &mut out).unwrap();
-        for e in entries {
-            clock.place(e, &mut out).unwrap();
-        }
-        clock.finish(&mut out);
-        let t: Vec<u64> = out.queue.iter().map(ImportRecord::t_ns).collect();
+        // The probe window itself is good: judge on the first stamp only.
+        let (t, _) = run_judged(&stamps, 1, false).unwrap();
         assert_eq!(t.len(), PROBE_RECORDS + 3);
         assert!(t.windows(2).all(|w| w[1] >= w[0]), "times never go back");
         assert_eq!(t[1], S + SYNTHETIC_STEP_NS);
