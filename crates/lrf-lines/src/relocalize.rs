@@ -252,7 +252,7 @@ pub fn relocalize(
     let runner_up = hypotheses
         .iter()
         .filter(|h| {
-            (h.pose.x - best.pose.x).hypot(h.pose.y - best.pose.y) > params.distinct_distance
+            libm::hypot(h.pose.x - best.pose.x, h.pose.y - best.pose.y) > params.distinct_distance
                 || angle_diff(h.pose.theta, best.pose.theta).abs() > params.distinct_angle
         })
         .map(|h| h.score)
