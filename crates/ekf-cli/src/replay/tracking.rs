@@ -2,10 +2,13 @@
 //!
 //! # When the filter counts as lost
 //!
-//! * **A motion gap**: a scan arrives and the motion source has said nothing since the
-//!   scan before, although it spoke earlier in the log, or its last message is more than
-//!   [`MOTION_GAP_NS`] old. Whatever the robot did meanwhile is unknown (seattle turns 80°
-//!   in such a gap, orebro has almost no odometry at all): the laser decides.
+//! * **A motion gap**: a scan arrives and the motion source's last message is older than
+//!   twice its usual interval (a running mean of its message intervals), or it has said
+//!   nothing since the scan before while it covers fewer than a quarter of the scan
+//!   intervals anyway. Whatever the robot did meanwhile is unknown (seattle turns 80° in
+//!   3 s without odometry, orebro has almost none at all): the laser decides. A laser
+//!   faster than the motion source leaves some scan intervals without a motion message;
+//!   those are no gap, as the next message's delta covers them.
 //! * **No line fused**: [`LOST_AFTER_SCANS`] scans in a row each extracted at least two
 //!   lines and fused none of them: the state no longer explains what the laser sees.
 //!
@@ -33,9 +36,6 @@
 use lrf_lines::{RelocalizeParams, SearchWindow};
 use nalgebra::{Matrix3, Point2};
 use serde::Serialize;
-
-/// A motion source silent this long before a scan counts as a gap (ns).
-pub const MOTION_GAP_NS: u64 = 1_000_000_000;
 
 /// Scans in a row with lines but none fused before the filter counts as lost.
 pub const LOST_AFTER_SCANS: u32 = 3;
@@ -106,6 +106,12 @@ pub struct Tracking {
     pub unlocked: bool,
     /// Laser scans seen.
     pub scans: u64,
+    /// Running mean of the motion source's message intervals (ns).
+    motion_interval_ns: Option<f64>,
+    /// Scan intervals (after the motion source first spoke) and how many had a motion
+    /// message.
+    intervals: u64,
+    covered: u64,
 }
 
 impl Tracking {
@@ -139,6 +145,11 @@ impl Tracking {
 
     /// A motion message at `t_ns`.
     pub fn motion(&mut self, t_ns: u64) {
+        if let Some(last) = self.last_motion_ns.filter(|&l| t_ns > l) {
+            let dt = (t_ns - last) as f64;
+            self.motion_interval_ns =
+                Some(self.motion_interval_ns.map_or(dt, |m| 0.9 * m + 0.1 * dt));
+        }
         self.motion_since_scan = true;
         self.motion_seen = true;
         self.last_motion_ns = Some(t_ns);
@@ -146,12 +157,18 @@ impl Tracking {
 
     /// Whether the scan at `t_ns` follows a motion gap; resets the per-scan flag.
     pub fn gap_before_scan(&mut self, t_ns: u64) -> bool {
-        let silent = self.motion_seen && !self.motion_since_scan;
-        let stale = self
-            .last_motion_ns
-            .is_some_and(|m| t_ns.saturating_sub(m) > MOTION_GAP_NS);
-        self.motion_since_scan = false;
-        silent || stale
+        if !self.motion_seen {
+            return false;
+        }
+        let covered = std::mem::replace(&mut self.motion_since_scan, false);
+        self.intervals += 1;
+        self.covered += u64::from(covered);
+        let rarely_covers = 4 * self.covered < self.intervals;
+        let stale = match (self.last_motion_ns, self.motion_interval_ns) {
+            (Some(last), Some(interval)) => t_ns.saturating_sub(last) as f64 > 2.0 * interval,
+            _ => false,
+        };
+        stale || (!covered && rarely_covers)
     }
 
     /// Notes a scan's outcome; returns whether the filter is lost now.
@@ -184,14 +201,33 @@ mod tests {
     use super::*;
 
     #[test]
-    fn a_gap_is_a_scan_without_motion_since_the_last_one_or_a_stale_motion_source() {
+    fn a_gap_is_a_motion_source_silent_for_twice_its_interval() {
         let mut t = Tracking::default();
         assert!(!t.gap_before_scan(5), "no motion source yet: no gap");
-        t.motion(10);
-        assert!(!t.gap_before_scan(20));
-        assert!(t.gap_before_scan(30), "no motion since the last scan");
-        t.motion(40);
-        assert!(t.gap_before_scan(40 + MOTION_GAP_NS + 1), "stale");
+        for k in 1..=10 {
+            t.motion(k * 50);
+        }
+        assert!(!t.gap_before_scan(520), "20 after the last message");
+        assert!(
+            !t.gap_before_scan(540),
+            "a laser faster than the motion source"
+        );
+        assert!(
+            t.gap_before_scan(601),
+            "silent for over twice its 50 interval"
+        );
+        t.motion(610);
+        assert!(!t.gap_before_scan(620));
+    }
+
+    #[test]
+    fn a_motion_source_that_rarely_covers_a_scan_interval_leaves_each_uncovered_one_a_gap() {
+        let mut t = Tracking::default();
+        t.motion(0);
+        t.motion(1_000);
+        // Scans every 10 after that, the motion source silent (its interval 1000).
+        let gaps: Vec<bool> = (1..=6).map(|k| t.gap_before_scan(1_000 + 10 * k)).collect();
+        assert_eq!(gaps, [false, false, false, false, true, true]);
     }
 
     #[test]
