@@ -49,6 +49,16 @@ pub struct RelocalizeParams {
     pub min_margin: f64,
 }
 
+impl RelocalizeParams {
+    /// Whether pose `a` is elsewhere than `b`: farther than
+    /// [`distinct_distance`](Self::distinct_distance) or turned more than
+    /// [`distinct_angle`](Self::distinct_angle).
+    pub fn elsewhere(&self, a: &Pose2<f64>, b: &Pose2<f64>) -> bool {
+        libm::hypot(a.x - b.x, a.y - b.y) > self.distinct_distance
+            || angle_diff(a.theta, b.theta).abs() > self.distinct_angle
+    }
+}
+
 impl Default for RelocalizeParams {
     fn default() -> Self {
         Self {
@@ -251,10 +261,7 @@ pub fn relocalize(
         .max_by(|x, y| x.score.total_cmp(&y.score))?;
     let runner_up = hypotheses
         .iter()
-        .filter(|h| {
-            libm::hypot(h.pose.x - best.pose.x, h.pose.y - best.pose.y) > params.distinct_distance
-                || angle_diff(h.pose.theta, best.pose.theta).abs() > params.distinct_angle
-        })
+        .filter(|h| params.elsewhere(&h.pose, &best.pose))
         .map(|h| h.score)
         .fold(0.0, f64::max);
     Some(Relocalization {
@@ -299,7 +306,7 @@ impl WallIndex {
                 for (dx, dy) in [(-1.0, -1.0), (-1.0, 1.0), (1.0, -1.0), (1.0, 1.0)] {
                     let c = cell(&Point2::new(p.x + dx * reach, p.y + dy * reach));
                     let list = cells.entry(c).or_default();
-                    if list.last() != Some(&i) && !list.contains(&i) {
+                    if !list.contains(&i) {
                         list.push(i);
                     }
                 }

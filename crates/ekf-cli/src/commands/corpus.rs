@@ -17,7 +17,7 @@ use std::time::Instant;
 pub const GLOBAL_START: (f64, f64, f64) = (1000.0, 1000.0, std::f64::consts::FRAC_PI_2);
 
 /// One log's result.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Default, Serialize)]
 pub struct CorpusRow {
     /// The log's name: its file name without `-corrected`, `.log` and `.gz`.
     pub log: String,
@@ -82,21 +82,7 @@ pub fn run_log(log: &Path, config: &Config, work_dir: &Path, global: bool) -> Co
     let name = log_name(log);
     let mut row = CorpusRow {
         log: name.clone(),
-        scans: 0,
-        repaired_stamps: 0,
-        clock_broken: false,
-        rmse_m: 0.0,
-        median_m: 0.0,
-        p95_m: 0.0,
-        max_m: 0.0,
-        over_half_m: 0.0,
-        over_1m: 0.0,
-        losses: 0,
-        relocalizations: 0,
-        locked_on_scan: None,
-        replay_s: 0.0,
-        wall_time_s: 0.0,
-        error: None,
+        ..CorpusRow::default()
     };
     if let Err(e) = fill_row(log, config, work_dir, &name, global, &mut row) {
         row.error = Some(e);

@@ -136,13 +136,6 @@ struct Chain {
     raw: Pose2<f64>,
 }
 
-/// A record on its way out, and whether it is a `FLASER` scan (whose range limit comes
-/// from the data).
-struct Held {
-    entry: Entry,
-    flaser: bool,
-}
-
 /// The state of a CARMEN import between lines.
 struct CarmenParser {
     flavour: CarmenFlavour,
@@ -150,14 +143,14 @@ struct CarmenParser {
     param_range_max: Option<f64>,
     front_laser_offset: f64,
     compass: Option<CompassNoise>,
-    /// Robot pose of the latest scan not yet followed by an `ODOM`.
-    open_scan: Option<Pose2<f64>>,
+    /// Line tag and robot pose of the latest scan not yet followed by an `ODOM`.
+    open_scan: Option<(&'static str, Pose2<f64>)>,
     chain: Option<Chain>,
     reset_seen: bool,
     /// Pose and stamp of the last `ODOM` line since the last scan (duplicates, resets).
     last_odom: Option<(Pose2<f64>, RawStamp)>,
     /// The look-ahead window until the clock and the range limit are judged.
-    probe: Option<Vec<Held>>,
+    probe: Option<Vec<Entry>>,
     probe_stamps: usize,
     range_max: Option<RangeMax>,
     clock: ClockRepair,
@@ -199,7 +192,7 @@ impl CarmenParser {
         }
         let raw_stamp = f.stamp(8, "timestamp")?;
         let last = self.last_odom.replace((pose, raw_stamp));
-        if let Some(scan_pose) = self.open_scan.take() {
+        if let Some((scan_tag, scan_pose)) = self.open_scan.take() {
             // A reset is the first ODOM after a scan, at the scan's pose. A plain log's robot
             // standing still repeats its pose with a good stamp: that is no reset.
             let standing =
@@ -210,7 +203,7 @@ impl CarmenParser {
                 self.chain = Some(Chain { prev: pose, raw });
                 self.reset_seen = true;
                 if self.flavour == CarmenFlavour::Auto {
-                    self.reference(f.line(), scan_pose, out)?;
+                    self.reference(f.line(), scan_tag, scan_pose, out)?;
                 }
                 return Ok(());
             }
@@ -224,7 +217,13 @@ impl CarmenParser {
         };
         self.chain = Some(Chain { prev: pose, raw });
         let record = ImportRecord::Odometry(Odometry { t_ns: 0, pose: raw });
-        self.emit(f, record, own(raw_stamp, 8, "timestamp"), false, out)
+        self.hold(
+            f.line(),
+            "ODOM",
+            record,
+            own(raw_stamp, 8, "timestamp"),
+            out,
+        )
     }
 
     fn flaser(&mut self, f: &Fields, out: &mut Output) -> Result<(), ImportError> {
@@ -248,9 +247,9 @@ impl CarmenParser {
         };
         self.scan(
             f,
+            "FLASER",
             scan,
             own(raw_stamp, n + 9, "timestamp"),
-            true,
             robot,
             out,
         )
@@ -298,65 +297,53 @@ impl CarmenParser {
         };
         self.scan(
             f,
+            "ROBOTLASER1",
             scan,
             own(raw_stamp, k + 11, "timestamp"),
-            false,
             robot,
             out,
         )
     }
 
+    /// A scan from a `tag` line (`FLASER` or `ROBOTLASER1`), with its reference when the
+    /// flavour is forced to corrected.
     fn scan(
         &mut self,
         f: &Fields,
+        tag: &'static str,
         scan: Scan,
         stamp: Stamp,
-        flaser: bool,
         robot: Pose2<f64>,
         out: &mut Output,
     ) -> Result<(), ImportError> {
         self.last_odom = None;
-        self.emit(f, ImportRecord::Scan(scan), stamp, flaser, out)?;
+        self.hold(f.line(), tag, ImportRecord::Scan(scan), stamp, out)?;
         if self.flavour == CarmenFlavour::Corrected {
-            self.reference(f.line(), robot, out)?;
+            self.reference(f.line(), tag, robot, out)?;
         }
         if self.flavour != CarmenFlavour::Plain {
-            self.open_scan = Some(robot);
+            self.open_scan = Some((tag, robot));
         }
         Ok(())
     }
 
-    /// A reference at `pose` for the scan just emitted, and its synthetic compass reading.
+    /// A reference at `pose` for the scan just emitted (from a `tag` line), and its
+    /// synthetic compass reading; both share the scan's time.
     fn reference(
         &mut self,
         line: u64,
+        tag: &'static str,
         pose: Pose2<f64>,
         out: &mut Output,
     ) -> Result<(), ImportError> {
         let record = ImportRecord::Reference(Reference { t_ns: 0, pose });
-        self.hold(line, "FLASER", record, Stamp::Shared, false, out)?;
+        self.hold(line, tag, record, Stamp::Shared, out)?;
         if let Some(noise) = &mut self.compass {
             // The heading is drawn now, in file order; its time is the scan's.
             let record = ImportRecord::Compass(noise.reading(0, &pose));
-            self.hold(line, "FLASER", record, Stamp::Shared, false, out)?;
+            self.hold(line, tag, record, Stamp::Shared, out)?;
         }
         Ok(())
-    }
-
-    fn emit(
-        &mut self,
-        f: &Fields,
-        record: ImportRecord,
-        stamp: Stamp,
-        flaser: bool,
-        out: &mut Output,
-    ) -> Result<(), ImportError> {
-        let tag = match record {
-            ImportRecord::Odometry(_) => "ODOM",
-            _ if flaser => "FLASER",
-            _ => "ROBOTLASER1",
-        };
-        self.hold(f.line(), tag, record, stamp, flaser, out)
     }
 
     /// Passes a record on: into the look-ahead window while it is open, else to the clock.
@@ -366,25 +353,21 @@ impl CarmenParser {
         tag: &'static str,
         record: ImportRecord,
         stamp: Stamp,
-        flaser: bool,
         out: &mut Output,
     ) -> Result<(), ImportError> {
-        let held = Held {
-            entry: Entry {
-                record,
-                line,
-                tag,
-                stamp,
-            },
-            flaser,
+        let entry = Entry {
+            record,
+            line,
+            tag,
+            stamp,
         };
         let Some(probe) = &mut self.probe else {
-            return self.release(held, out);
+            return self.release(entry, out);
         };
         if matches!(stamp, Stamp::Own { .. }) {
             self.probe_stamps += 1;
         }
-        probe.push(held);
+        probe.push(entry);
         if self.probe_stamps >= PROBE_RECORDS {
             self.close_probe(out)?;
         }
@@ -396,38 +379,39 @@ impl CarmenParser {
         let Some(probe) = self.probe.take() else {
             return Ok(());
         };
-        let flaser_ranges =
-            probe
-                .iter()
-                .filter(|h| h.flaser)
-                .filter_map(|h| match &h.entry.record {
-                    ImportRecord::Scan(s) => Some(s.ranges.as_slice()),
-                    _ => None,
-                });
+        let flaser_ranges = probe
+            .iter()
+            .filter_map(flaser_scan)
+            .map(|s| s.ranges.as_slice());
         self.range_max = Some(range_limit(
             flaser_ranges,
             self.param_range_max,
             self.laser_max_range,
         ));
-        let (held, entries): (Vec<bool>, Vec<Entry>) =
-            probe.into_iter().map(|h| (h.flaser, h.entry)).unzip();
-        self.clock.judge(&entries, out)?;
-        for (flaser, entry) in held.into_iter().zip(entries) {
-            self.release(Held { entry, flaser }, out)?;
+        self.clock.judge(&probe, out)?;
+        for entry in probe {
+            self.release(entry, out)?;
         }
         Ok(())
     }
 
-    fn release(&mut self, mut held: Held, out: &mut Output) -> Result<(), ImportError> {
-        if held.flaser {
-            if let (ImportRecord::Scan(scan), Some(limit)) =
-                (&mut held.entry.record, self.range_max)
-            {
+    /// Gives a `FLASER` scan the log's range limit, then the record its time.
+    fn release(&mut self, mut entry: Entry, out: &mut Output) -> Result<(), ImportError> {
+        if let (Some(limit), true) = (self.range_max, flaser_scan(&entry).is_some()) {
+            if let ImportRecord::Scan(scan) = &mut entry.record {
                 scan.range_max = limit.value;
                 out.stats.laser_range_max = Some(limit);
             }
         }
-        self.clock.place(held.entry, out)
+        self.clock.place(entry, out)
+    }
+}
+
+/// The scan of a `FLASER` line (whose range limit comes from the data), if `entry` is one.
+fn flaser_scan(entry: &Entry) -> Option<&Scan> {
+    match &entry.record {
+        ImportRecord::Scan(s) if entry.tag == "FLASER" => Some(s),
+        _ => None,
     }
 }
 

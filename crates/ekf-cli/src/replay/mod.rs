@@ -987,7 +987,6 @@ impl<'a> Run<'a> {
                 }
                 Err(e) => return Err(e.into()),
             };
-            self.tracking.scans += 1;
             let gap = self.tracking.gap_before_scan(now);
             let report = self.check_tracking(&scan, now, gap, report)?;
             let l = &mut self.summary.lines;
@@ -1093,9 +1092,7 @@ impl<'a> Run<'a> {
             return Ok(report);
         };
         let best = found.best.pose;
-        if (best.x - pose.x).hypot(best.y - pose.y) <= params.distinct_distance
-            && ekf_core::angle_diff(best.theta, pose.theta).abs() <= params.distinct_angle
-        {
+        if !params.elsewhere(&best, &pose) {
             // The estimate is where the search puts it.
             self.tracking.locked(&mut self.summary.tracking);
             return Ok(report);

@@ -158,8 +158,10 @@ impl Tracking {
         self.last_motion_ns = Some(t_ns);
     }
 
-    /// Whether the scan at `t_ns` follows a motion gap; resets the per-scan flag.
+    /// Counts the scan at `t_ns` and says whether it follows a motion gap; resets the
+    /// per-scan flag.
     pub fn gap_before_scan(&mut self, t_ns: u64) -> bool {
+        self.scans += 1;
         if !self.motion_seen {
             return false;
         }
