@@ -291,3 +291,27 @@ fn a_log_without_records_to_import_is_an_error_and_its_bag_is_finished() {
     let written = ekf_cli::mcap_io::BagReader::open(&bag).unwrap();
     assert!(written.topics().is_empty());
 }
+
+#[test]
+fn a_plain_log_standing_still_is_no_reset_and_a_repeated_odom_line_is_a_duplicate() {
+    // The robot stands still: the ODOM after the scan repeats the pose of the one before
+    // it, with a good stamp. That is odometry, not a GMapping reset.
+    let text = "ODOM 1 2 0.5 0 0 0 1 h 1\n\
+                FLASER 2 1.0 1.0 1 2 0.5 1 2 0.5 1.5 h 1.5\n\
+                ODOM 1 2 0.5 0 0 0 2 h 2\n\
+                ODOM 1 2 0.5 0 0 0 2 h 2\n";
+    let mut reader = read_carmen(text.as_bytes(), CarmenOptions::default());
+    let kinds: Vec<&str> = reader
+        .by_ref()
+        .map(|r| match r.unwrap() {
+            ImportRecord::Odometry(_) => "odom",
+            ImportRecord::Scan(_) => "scan",
+            ImportRecord::Reference(_) => "ref",
+            ImportRecord::Compass(_) => "compass",
+        })
+        .collect();
+    assert_eq!(kinds, ["odom", "scan", "odom"]);
+    let stats = reader.stats();
+    assert_eq!(stats.odometry_resets, 0);
+    assert_eq!(stats.duplicates.first_lines, [4]);
+}

@@ -147,8 +147,10 @@ struct CarmenParser {
     open_scan: Option<(&'static str, Pose2<f64>)>,
     chain: Option<Chain>,
     reset_seen: bool,
-    /// Pose and stamp of the last `ODOM` line since the last scan (duplicates, resets).
+    /// Pose and stamp of the last `ODOM` line (duplicates, resets).
     last_odom: Option<(Pose2<f64>, RawStamp)>,
+    /// A scan came after that `ODOM`: the next one repeating it is no duplicate.
+    scan_since_odom: bool,
     /// The look-ahead window until the clock and the range limit are judged.
     probe: Option<Vec<Entry>>,
     probe_stamps: usize,
@@ -168,6 +170,7 @@ impl CarmenParser {
             chain: None,
             reset_seen: false,
             last_odom: None,
+            scan_since_odom: false,
             probe: Some(Vec::new()),
             probe_stamps: 0,
             range_max: None,
@@ -192,6 +195,7 @@ impl CarmenParser {
         }
         let raw_stamp = f.stamp(8, "timestamp")?;
         let last = self.last_odom.replace((pose, raw_stamp));
+        let after_scan = std::mem::replace(&mut self.scan_since_odom, false);
         if let Some((scan_tag, scan_pose)) = self.open_scan.take() {
             // A reset is the first ODOM after a scan, at the scan's pose. A plain log's robot
             // standing still repeats its pose with a good stamp: that is no reset.
@@ -207,7 +211,7 @@ impl CarmenParser {
                 }
                 return Ok(());
             }
-        } else if last == Some((pose, raw_stamp)) {
+        } else if !after_scan && last == Some((pose, raw_stamp)) {
             out.stats.duplicates.add(f.line());
             return Ok(());
         }
@@ -316,7 +320,7 @@ impl CarmenParser {
         robot: Pose2<f64>,
         out: &mut Output,
     ) -> Result<(), ImportError> {
-        self.last_odom = None;
+        self.scan_since_odom = true;
         self.hold(f.line(), tag, ImportRecord::Scan(scan), stamp, out)?;
         if self.flavour == CarmenFlavour::Corrected {
             self.reference(f.line(), tag, robot, out)?;
