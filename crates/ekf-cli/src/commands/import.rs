@@ -227,7 +227,8 @@ pub fn repair_lines(stats: &ImportStats) -> Vec<String> {
     if r.clock_broken {
         lines.push(format!(
             "the log's clock is broken throughout (its stamps do not advance); every record \
-             has a synthetic time in file order, {} s apart",
+             has a synthetic time in file order, {} s apart (a scan at the time of the \
+             odometry record stamped like it)",
             SYNTHETIC_STEP_NS as f64 * 1e-9
         ));
     }

@@ -12,7 +12,12 @@
 //!   times, or fewer than half of the consecutive positive ones increase (CARMEN logs whose stamps are all 0, run backwards, or are printed with six
 //!   significant digits so that thousands of records share one value). Every record then
 //!   gets `k · SYNTHETIC_STEP_NS` (its place `k` = 1, 2, … in the file), and the summary
-//!   says so.
+//!   says so. One exception keeps what the file does say: a sensor record whose raw stamp
+//!   equals that of the odometry record just before it was taken at that odometry's
+//!   instant (CARMEN writes every scan with the stamp of the odometry pose it was taken
+//!   at, even where the clock itself is useless), so it shares that record's time. Replay
+//!   then fuses the scan where the odometry left the robot instead of carrying the robot
+//!   on for another step at its last rate.
 //! * **Otherwise** a stamp is *good* when it is a positive time not before the last good
 //!   stamp. A record with a bad stamp (negative, 0, a non-zero value below 1 ns such as
 //!   `8.97e-67`, or earlier than the last good stamp) waits for the next good stamp; the
@@ -100,7 +105,8 @@ impl RepairCount {
 #[derive(Debug, Clone, Default, PartialEq, Eq, Serialize)]
 pub struct TimeRepairs {
     /// The clock was judged broken throughout: every record has a synthetic time in file
-    /// order, [`SYNTHETIC_STEP_NS`] apart. The other counts stay 0 then.
+    /// order, [`SYNTHETIC_STEP_NS`] apart (a sensor record stamped like the odometry
+    /// record before it shares its time). The other counts stay 0 then.
     pub clock_broken: bool,
     /// Negative stamps repaired.
     pub negative: RepairCount,
@@ -161,6 +167,8 @@ pub(crate) struct ClockRepair {
     last_ns: u64,
     /// Records with their own stamp placed so far (broken mode).
     placed: u64,
+    /// The raw stamp of the last record placed, if it was odometry (broken mode).
+    odometry_raw: Option<RawStamp>,
 }
 
 impl ClockRepair {
@@ -173,6 +181,7 @@ impl ClockRepair {
             anchor_ns: None,
             last_ns: 0,
             placed: 0,
+            odometry_raw: None,
         }
     }
 
@@ -214,9 +223,14 @@ impl ClockRepair {
     pub(crate) fn place(&mut self, entry: Entry, out: &mut Output) -> Result<(), ImportError> {
         match self.mode {
             Some(Mode::Broken) => {
-                if matches!(entry.stamp, Stamp::Own { .. }) {
-                    self.placed += 1;
-                    self.last_ns = self.placed * SYNTHETIC_STEP_NS;
+                if let Stamp::Own { raw, .. } = entry.stamp {
+                    let odometry = matches!(entry.record, ImportRecord::Odometry(_));
+                    let with_odometry = !odometry && self.odometry_raw == Some(raw);
+                    if !with_odometry {
+                        self.placed += 1;
+                        self.last_ns = self.placed * SYNTHETIC_STEP_NS;
+                    }
+                    self.odometry_raw = odometry.then_some(raw);
                 }
                 self.emit(entry.record, self.last_ns, out);
             }
@@ -441,6 +455,50 @@ mod tests {
             [1, 2, 3, 4].map(|k| k * SYNTHETIC_STEP_NS),
             "synthetic times in file order"
         );
+    }
+
+    #[test]
+    fn a_broken_clock_keeps_a_scan_at_the_instant_of_its_odometry() {
+        use RawStamp::*;
+        let t = Valid(7 * S);
+        let scan = |line, raw| Entry {
+            record: ImportRecord::Scan(crate::import::record::Scan {
+                t_ns: 0,
+                angle_min: 0.0,
+                angle_increment: 0.01,
+                range_min: 0.0,
+                range_max: 10.0,
+                ranges: vec![1.0],
+                mount: Pose2::new(0.0, 0.0, 0.0),
+            }),
+            line,
+            tag: "FLASER",
+            stamp: Stamp::Own {
+                raw,
+                field: 0,
+                name: "timestamp",
+            },
+        };
+        // odometry, scan (same raw stamp), odometry, scan, scan (no odometry between),
+        // odometry, scan with another stamp.
+        let entries = vec![
+            entry(1, t),
+            scan(2, t),
+            entry(3, t),
+            scan(4, t),
+            scan(5, t),
+            entry(6, t),
+            scan(7, Valid(8 * S)),
+        ];
+        let mut clock = ClockRepair::new(false);
+        let mut out = Output::default();
+        clock.judge(&entries, &mut out).unwrap();
+        for e in entries {
+            clock.place(e, &mut out).unwrap();
+        }
+        let times: Vec<u64> = out.queue.iter().map(ImportRecord::t_ns).collect();
+        assert!(out.stats.time_repairs.clock_broken);
+        assert_eq!(times, [1, 1, 2, 2, 3, 4, 5].map(|k| k * SYNTHETIC_STEP_NS));
     }
 
     #[test]

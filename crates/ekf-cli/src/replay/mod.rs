@@ -488,11 +488,14 @@ impl MotionRate {
     }
 }
 
-/// The time the filter state refers to, and the rate of the last motion step.
+/// The time the filter state refers to, and the rate and end of the last motion step.
 #[derive(Debug, Clone, Copy, Default)]
 struct MotionClock {
     state_ns: Option<u64>,
     rate: Option<MotionRate>,
+    /// The end of the last motion step taken (ns): extrapolation at its rate reaches at
+    /// most [`MAX_EXTRAPOLATION_NS`] beyond it.
+    motion_ns: Option<u64>,
     /// The time of the initial state: motion before it is already in the initial pose (a
     /// reference pose taken as the start), so only the part of a step after it counts.
     start_ns: u64,
@@ -517,8 +520,24 @@ impl MotionClock {
         }
         let start = self.state_ns.map_or(t0, |s| s.max(t0)).max(self.start_ns);
         self.state_ns = Some(self.state_ns.map_or(t1, |s| s.max(t1)));
+        self.motion_ns = Some(self.motion_ns.map_or(t1, |s| s.max(t1)));
         self.rate = Some(step.rate((t1 - t0) as f64 * 1e-9));
         (start < t1).then(|| step.part((t1 - start) as f64 / (t1 - t0) as f64))
+    }
+
+    /// The step that brings the state from its time to `t_ns` at the last motion rate,
+    /// if `t_ns` is later than the state and at most [`MAX_EXTRAPOLATION_NS`] after the
+    /// end of the last motion step; the state then refers to `t_ns`. Later times are left
+    /// to the next motion message (the robot may have stopped). The limit counts from the
+    /// last motion message, not from the last extrapolation: a source that falls silent
+    /// is not carried on at its last rate scan after scan.
+    fn extrapolate(&mut self, t_ns: u64) -> Option<MotionStep> {
+        let (state, rate, motion) = (self.state_ns?, self.rate?, self.motion_ns?);
+        if t_ns <= state || t_ns - motion > MAX_EXTRAPOLATION_NS {
+            return None;
+        }
+        self.state_ns = Some(t_ns);
+        Some(rate.over((t_ns - state) as f64 * 1e-9))
     }
 }
 
@@ -851,21 +870,14 @@ impl<'a> Run<'a> {
         }))
     }
 
-    /// Brings the state to `t_ns` at the last motion rate before a scan or heading is
-    /// fused there, if the gap is short ([`MAX_EXTRAPOLATION_NS`]); longer gaps are left
-    /// to the next motion message (the robot may have stopped).
+    /// Brings the state to `t_ns` before a scan or heading is fused there
+    /// ([`MotionClock::extrapolate`]).
     fn catch_up(&mut self, t_ns: u64) -> Result<(), ReplayError> {
-        let (Some(state), Some(rate)) = (self.clock.state_ns, self.clock.rate) else {
-            return Ok(());
-        };
-        if t_ns <= state || t_ns - state > MAX_EXTRAPOLATION_NS {
-            return Ok(());
+        match self.clock.extrapolate(t_ns) {
+            None => {}
+            Some(MotionStep::Wheels(s)) => self.localizer.predict_wheels(&s)?,
+            Some(MotionStep::Odometry(m)) => self.localizer.predict_odometry(&m)?,
         }
-        match rate.over((t_ns - state) as f64 * 1e-9) {
-            MotionStep::Wheels(s) => self.localizer.predict_wheels(&s)?,
-            MotionStep::Odometry(m) => self.localizer.predict_odometry(&m)?,
-        }
-        self.clock.state_ns = Some(t_ns);
         Ok(())
     }
 
@@ -1186,6 +1198,32 @@ mod tests {
     ) {
         run.handle(&recorder.record(None, topic, m).unwrap())
             .unwrap();
+    }
+
+    #[test]
+    fn extrapolation_reaches_only_shortly_past_the_last_motion_step() {
+        const MS: u64 = 1_000_000;
+        let mut clock = MotionClock::default();
+        let step = MotionStep::Odometry(Motion {
+            ds: 0.1,
+            dtheta: 0.02,
+        });
+        // A step of 0.1 m over 100 ms, then scans 50, 150 and 250 ms after it ends.
+        assert!(clock.advance(step, 1000 * MS, 1100 * MS).is_some());
+        let ds = |s: Option<MotionStep>| match s {
+            Some(MotionStep::Odometry(m)) => Some((m.ds * 1e6).round() / 1e6),
+            _ => None,
+        };
+        assert_eq!(ds(clock.extrapolate(1150 * MS)), Some(0.05));
+        assert_eq!(ds(clock.extrapolate(1150 * MS)), None, "already there");
+        assert_eq!(ds(clock.extrapolate(1250 * MS)), Some(0.1));
+        assert_eq!(
+            ds(clock.extrapolate(1350 * MS)),
+            None,
+            "250 ms after the last motion message: not carried on"
+        );
+        // The next message's step counts only after the time the state refers to.
+        assert_eq!(ds(clock.advance(step, 1200 * MS, 1300 * MS)), Some(0.05));
     }
 
     #[test]
