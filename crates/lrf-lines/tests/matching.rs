@@ -1,4 +1,5 @@
-//! Matching observed lines to map walls: gate, overlap, one wall per line.
+//! Matching observed lines to map walls: gate, overlap, one wall per line, joint
+//! compatibility.
 
 mod matching_support;
 
@@ -136,6 +137,105 @@ fn parallel_walls_are_told_apart_by_overlap() {
         .starts_with("no overlap"));
 }
 
+/// The joint NIS `D² = yᵀ S⁻¹ y` of matches stacked, `S = H P Hᵀ + R`, computed in one
+/// batch at the state matching ran at.
+fn batch_joint_nis(out: &MatchResult, p: &Matrix3<f64>) -> f64 {
+    let k = out.matches().len();
+    let (mut y, mut h, mut r) = (
+        nalgebra::DVector::zeros(2 * k),
+        nalgebra::DMatrix::zeros(2 * k, 3),
+        nalgebra::DMatrix::zeros(2 * k, 2 * k),
+    );
+    for (i, m) in out.matches().iter().enumerate() {
+        let inn = &m.innovation;
+        y.rows_mut(2 * i, 2).copy_from(&inn.y);
+        h.view_mut((2 * i, 0), (2, 3)).copy_from(&inn.h);
+        let ri = inn.s - inn.h * p * inn.h.transpose();
+        r.view_mut((2 * i, 2 * i), (2, 2)).copy_from(&ri);
+    }
+    let pd = nalgebra::DMatrix::from_iterator(3, 3, p.iter().copied());
+    let s = &h * pd * h.transpose() + r;
+    (y.transpose() * s.try_inverse().unwrap() * &y)[(0, 0)]
+}
+
+#[test]
+fn lines_are_paired_so_that_one_pose_explains_them_all() {
+    // A corridor (walls at y = ±1) with another wall 1.2 m beyond its right wall.
+    let left: Wall = (Point2::new(0.0, 1.0), Point2::new(10.0, 1.0));
+    let right: Wall = (Point2::new(0.0, -1.0), Point2::new(10.0, -1.0));
+    let beyond: Wall = (Point2::new(0.0, -2.2), Point2::new(10.0, -2.2));
+    let map = map_of(&[left, right, beyond]);
+    let truth = Pose2::new(3.0, 0.0, 0.0);
+    let observed = see(&[left, right], &truth);
+    // The filter believes the robot 0.65 m to the right, with σ = 0.6 m.
+    let p = Matrix3::from_diagonal(&Vector3::new(0.36, 0.36, 2.0_f64.to_radians().powi(2)));
+    let ekf = Ekf::new(Pose2::new(3.0, -0.65, 0.0), p).unwrap();
+    let nis = |i: usize, j: usize| {
+        let o = &observed[i];
+        let noise = matcher().params().line_noise(&o.covariance);
+        let m = LaserLine::new(o.line, noise, map.segments[j].line, mount()).unwrap();
+        ekf.innovation(&m).unwrap().nis
+    };
+    // Each line alone fits: the right line even fits the wall beyond better than its own,
+    // so the nearest wall of each line would put the robot both up and down at once.
+    assert!(nis(1, 2) < nis(1, 1) && nis(1, 1) < 9.21 && nis(0, 0) < 9.21);
+    let mut out = MatchResult::new();
+    matcher().match_lines(&observed, &map, &ekf, &mount(), &mut out);
+    let pairs: Vec<(usize, usize)> = out.matches().iter().map(|m| (m.observed, m.map)).collect();
+    let mut sorted = pairs.clone();
+    sorted.sort_unstable();
+    assert_eq!(sorted, [(0, 0), (1, 1)], "one pose: 0.65 m to the left");
+    let threshold = ekf_core::chi_square_quantile(0.99, 4).unwrap();
+    let d2 = batch_joint_nis(&out, &p);
+    assert!(d2 <= threshold, "jointly compatible: {d2} > {threshold}");
+
+    // A line that no pose shared with the others explains stays unmatched, even where
+    // it fits a wall best of all on its own: something 0.35 m to the right of the robot
+    // (a row of boxes along the corridor), just where the filter expects the right wall.
+    let boxes: Wall = (Point2::new(0.0, -0.35), Point2::new(10.0, -0.35));
+    let mut with_boxes = observed.clone();
+    with_boxes.push(see(&[boxes], &truth)[0]);
+    let box_nis = {
+        let o = &with_boxes[2];
+        let noise = matcher().params().line_noise(&o.covariance);
+        let m = LaserLine::new(o.line, noise, map.segments[1].line, mount()).unwrap();
+        ekf.innovation(&m).unwrap().nis
+    };
+    assert!(
+        box_nis < nis(1, 1),
+        "the boxes fit the right wall best: {box_nis}"
+    );
+    matcher().match_lines(&with_boxes, &map, &ekf, &mount(), &mut out);
+    let mut pairs: Vec<(usize, usize)> =
+        out.matches().iter().map(|m| (m.observed, m.map)).collect();
+    pairs.sort_unstable();
+    assert_eq!(pairs, [(0, 0), (1, 1)]);
+    assert_eq!(out.rejections().len(), 1);
+    assert_eq!(out.rejections()[0].observed, 2);
+    assert_eq!(
+        out.rejections()[0].reason,
+        RejectReason::MapLineTaken { map: 1, by: 1 }
+    );
+
+    // A line that fits only a wall nobody took, at a pose the others rule out: 2.5 m to
+    // the right fits the wall beyond (predicted 1.55 m) alone, but needs the robot
+    // 0.95 m further right where the corridor's walls put it 0.65 m left.
+    let far: Wall = (Point2::new(0.0, -2.5), Point2::new(10.0, -2.5));
+    let mut with_far = observed.clone();
+    with_far.push(see(&[far], &truth)[0]);
+    matcher().match_lines(&with_far, &map, &ekf, &mount(), &mut out);
+    assert_eq!(out.matches().len(), 2);
+    assert_eq!(out.rejections().len(), 1);
+    assert_eq!(
+        out.rejections()[0].reason,
+        RejectReason::Incompatible { map: 2 }
+    );
+    assert!(out.rejections()[0]
+        .reason
+        .to_string()
+        .starts_with("not jointly compatible"));
+}
+
 #[test]
 fn a_map_line_is_used_once_by_the_best_fitting_line() {
     let wall: Wall = (Point2::new(4.0, -3.0), Point2::new(4.0, 3.0));
@@ -266,6 +366,14 @@ proptest! {
         for m in out.matches() {
             prop_assert!(m.map < map.len());
             prop_assert!(matcher.gate().accepts(m.innovation.nis));
+        }
+        // The matches are jointly compatible, computed in one batch (the search adds the
+        // pairs one at a time); a relative margin for the rounding of either way.
+        let k = out.matches().len();
+        if k > 0 {
+            let threshold = ekf_core::chi_square_quantile(params.0, 2 * k as u32).unwrap();
+            let d2 = batch_joint_nis(&out, ekf.covariance());
+            prop_assert!(d2 <= threshold * (1.0 + 1e-6), "D² {} > {}", d2, threshold);
         }
     }
 }

@@ -18,7 +18,7 @@ pub struct LocalizerConfig {
     pub wheel_noise: WheelNoise<f64>,
     /// Odometry-delta noise for
     /// [`Localizer::predict_odometry`](super::Localizer::predict_odometry). Default:
-    /// `σ_s = 0.05·L + 0.01 m`, `σ_e = 0.03·L + 0.01 m`, `σ_θ = 0.10·R + 0.07·L + 0.5°`.
+    /// `σ_s = 0.05·L + 0.01 m`, `σ_e = 0.03·L + 0.01 m`, `σ_θ = 0.30·R + 0.07·L + 0.5°`.
     pub odometry_noise: OdometryNoise<f64>,
     /// The laser's pose on the robot `(x, y, θ)` (m, m, rad). Default: the identity, a
     /// ROS-style scanner at the robot's origin facing forward. The paper's SICK, whose 0°

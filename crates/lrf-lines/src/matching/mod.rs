@@ -1,6 +1,9 @@
 //! Data association: which map wall each observed line is, by the Mahalanobis distance in
 //! innovation space (ekf-core's laser-line model), a chi-square gate and a segment-overlap
-//! check, with each map wall used at most once per scan.
+//! check per pair, then the largest jointly compatible set of pairs ([`joint`]), each map
+//! wall used at most once per scan.
+
+pub mod joint;
 
 use crate::map::{LineMap, MapSegment};
 use crate::ObservedLine;
@@ -10,7 +13,7 @@ use core::fmt;
 use ekf_core::{
     angle_diff, ChiSquareGate, Considered, Ekf, Error, Innovation, LaserLine, Line, Pose2,
 };
-use nalgebra::{Matrix2, Point2};
+use nalgebra::{Matrix2, Matrix3, Point2};
 use serde::{Deserialize, Serialize};
 
 /// What the matcher knows of the error of a map's walls beyond the map noise of
@@ -115,13 +118,21 @@ pub enum RejectReason {
         /// The closest wall (by NIS) that passed the gate.
         map: usize,
     },
-    /// Every wall that passed both tests was taken by another observed line with a
-    /// smaller NIS; `map` is this line's best wall, `by` the line that took it.
+    /// This line's best wall (by NIS) went to another observed line of the jointly
+    /// compatible hypothesis, and none of its other walls fits that hypothesis; `map` is
+    /// this line's best wall, `by` the line that took it.
     MapLineTaken {
         /// This line's best wall.
         map: usize,
         /// The observed line it was assigned to.
         by: usize,
+    },
+    /// Walls passed both tests, but pairing any of them with this line contradicts the
+    /// other pairs of the hypothesis chosen (no one pose explains them together); `map`
+    /// is this line's best wall.
+    Incompatible {
+        /// This line's best wall (by NIS).
+        map: usize,
     },
     /// The observed line has a non-finite value or a covariance that is not symmetric
     /// positive definite.
@@ -136,6 +147,10 @@ impl fmt::Display for RejectReason {
             RejectReason::MapLineTaken { map, by } => write!(
                 f,
                 "map line {map} already taken by a better match (observed line {by})"
+            ),
+            RejectReason::Incompatible { map } => write!(
+                f,
+                "not jointly compatible with the scan's other matches (closest map line {map})"
             ),
             RejectReason::InvalidLine(e) => write!(f, "invalid line: {e}"),
         }
@@ -154,11 +169,19 @@ pub struct Rejection {
 /// The sort key of a gated pair that also passed the overlap check; the pair itself is
 /// `MatchResult::pairs[pair]` (kept apart so sorting moves 32 bytes, not 200).
 #[derive(Debug, Clone, Copy)]
-struct Candidate {
+pub(crate) struct Candidate {
     nis: f64,
     observed: usize,
     map: usize,
     pair: usize,
+}
+
+/// Candidates in increasing NIS, ties by observed line, then wall.
+fn by_nis(a: &Candidate, b: &Candidate) -> core::cmp::Ordering {
+    a.nis
+        .total_cmp(&b.nis)
+        .then(a.observed.cmp(&b.observed))
+        .then(a.map.cmp(&b.map))
 }
 
 /// What is known about one observed line while matching.
@@ -206,6 +229,13 @@ pub struct MatchResult {
     status: Vec<Status>,
     owner: Vec<Option<usize>>,
     walls: Vec<WallCache>,
+    /// Per observed line with candidates: `(observed, first, end)` of its candidates.
+    lines: Vec<(usize, usize, usize)>,
+    joint: joint::JointSearch,
+    /// The candidates of the hypothesis chosen.
+    chosen: Vec<usize>,
+    /// Candidate indices in increasing NIS (greedy pairing).
+    greedy: Vec<usize>,
 }
 
 impl MatchResult {
@@ -214,7 +244,7 @@ impl MatchResult {
         Self::default()
     }
 
-    /// The matches, in the order they were assigned (increasing NIS).
+    /// The matches, by increasing NIS (the order the localizer fuses them in).
     pub fn matches(&self) -> &[LineMatch] {
         &self.matches
     }
@@ -229,6 +259,82 @@ impl MatchResult {
         self.matches.iter().find(|m| m.observed == observed)
     }
 
+    /// Chooses among the gated candidates (at the state covariance `p`, gate probability
+    /// `probability`) and records each line's outcome: the jointly compatible hypothesis
+    /// ([`joint`]), or, when a wall of the map carries a considered error, the greedy one.
+    ///
+    /// The joint test is a linear update of the state alone. A first-scan map's walls
+    /// were placed from the state, so their errors are correlated with it and with each
+    /// other, and the per-pair covariance `S` already nets that out; the joint test has no
+    /// model of it and would refuse consistent pairs. Such scans (one room, the map seen
+    /// from where it was made) are paired greedily: candidates in increasing NIS, each
+    /// taken unless its line is matched or its wall taken.
+    fn associate(&mut self, p: &Matrix3<f64>, probability: f64) {
+        for &(_, first, end) in &self.lines {
+            self.candidates[first..end].sort_unstable_by(by_nis);
+        }
+        // The most confident lines first: their pairs bound the search soonest.
+        let candidates = &self.candidates;
+        self.lines
+            .sort_unstable_by(|a, b| by_nis(&candidates[a.1], &candidates[b.1]));
+        self.chosen.clear();
+        if self.walls.iter().any(|w| w.considered.is_some()) {
+            self.choose_greedily();
+        } else {
+            self.joint.run(
+                self.lines.iter().map(|&(_, first, end)| (first, end)),
+                &self.candidates,
+                &self.pairs,
+                p,
+                probability,
+                &mut self.owner,
+            );
+            self.chosen.extend(self.joint.best());
+        }
+        for &c in &self.chosen {
+            let c = self.candidates[c];
+            self.status[c.observed] = Status::Matched;
+            self.owner[c.map] = Some(c.observed);
+            if let Some(pair) = self.pairs.get(c.pair) {
+                self.matches.push(*pair);
+            }
+        }
+        self.matches.sort_unstable_by(|a, b| {
+            a.innovation
+                .nis
+                .total_cmp(&b.innovation.nis)
+                .then(a.observed.cmp(&b.observed))
+        });
+        for &(observed, first, _) in &self.lines {
+            if self.status[observed] == Status::Matched {
+                continue;
+            }
+            let map = self.candidates[first].map;
+            self.status[observed] = Status::Unmatched(match self.owner[map] {
+                Some(by) => RejectReason::MapLineTaken { map, by },
+                None => RejectReason::Incompatible { map },
+            });
+        }
+    }
+
+    /// Greedy pairing into `chosen`: all candidates in increasing NIS, each taken unless
+    /// its line or its wall already is (marked in `status` and `owner` as it goes).
+    fn choose_greedily(&mut self) {
+        self.greedy.clear();
+        self.greedy.extend(0..self.candidates.len());
+        let candidates = &self.candidates;
+        self.greedy
+            .sort_unstable_by(|&a, &b| by_nis(&candidates[a], &candidates[b]));
+        for &i in &self.greedy {
+            let c = &self.candidates[i];
+            if self.status[c.observed] != Status::Matched && self.owner[c.map].is_none() {
+                self.status[c.observed] = Status::Matched;
+                self.owner[c.map] = Some(c.observed);
+                self.chosen.push(i);
+            }
+        }
+    }
+
     fn clear(&mut self, num_observed: usize, num_walls: usize) {
         self.matches.clear();
         self.rejections.clear();
@@ -240,6 +346,7 @@ impl MatchResult {
         self.owner.clear();
         self.owner.resize(num_walls, None);
         self.walls.clear();
+        self.lines.clear();
     }
 }
 
@@ -253,10 +360,14 @@ impl MatchResult {
 ///    sensor pose `x⁻ ⊕ mount` and projected onto the wall's direction, overlaps the
 ///    wall's extent by at least `min(min_overlap, min_overlap_fraction · ℓ)`.
 ///
-/// Conflicts are resolved globally and greedily: candidates are sorted by NIS (ties by
-/// observed, then wall index) and assigned in that order, skipping lines already matched
-/// and walls already taken. So each wall is used at most once, and a wall goes to the
-/// line that fits it best.
+/// Of the candidates, the hypothesis kept pairs the most lines, each wall at most once,
+/// while the pairs are jointly compatible at the same probability
+/// (`D² ≤ χ²_{2k}⁻¹(gate_probability)` for `k` pairs), ties going to the smaller joint
+/// NIS: joint compatibility branch and bound ([`joint`]). Lines that would contradict
+/// the others stay unmatched. Against a map whose walls carry considered errors (a
+/// first-scan map), pairing is greedy instead: candidates in increasing NIS, each wall
+/// to the line that fits it best. The matches are listed in increasing NIS, the order
+/// the localizer fuses them in.
 ///
 /// Before the full innovation of a pair is computed, two lower bounds on its NIS skip
 /// pairs that cannot pass the gate, which changes no decision: for a 2-D Gaussian
@@ -332,30 +443,7 @@ impl Matcher {
             }
             self.gate_line(i, line, map, ekf, mount, out);
         }
-        out.candidates.sort_unstable_by(|a, b| {
-            a.nis
-                .total_cmp(&b.nis)
-                .then(a.observed.cmp(&b.observed))
-                .then(a.map.cmp(&b.map))
-        });
-        for c in &out.candidates {
-            match (out.status[c.observed], out.owner[c.map]) {
-                (Status::Matched, _) => {}
-                (Status::Unmatched(_), None) => {
-                    out.status[c.observed] = Status::Matched;
-                    out.owner[c.map] = Some(c.observed);
-                    if let Some(pair) = out.pairs.get(c.pair) {
-                        out.matches.push(*pair);
-                    }
-                }
-                // The first taken wall met in NIS order is this line's best one.
-                (Status::Unmatched(RejectReason::MapLineTaken { .. }), Some(_)) => {}
-                (Status::Unmatched(_), Some(by)) => {
-                    out.status[c.observed] =
-                        Status::Unmatched(RejectReason::MapLineTaken { map: c.map, by });
-                }
-            }
-        }
+        out.associate(ekf.covariance(), self.params.gate_probability);
         for (i, status) in out.status.iter().enumerate() {
             if let Status::Unmatched(reason) = status {
                 out.rejections.push(Rejection {
@@ -409,6 +497,7 @@ impl Matcher {
             }
         }
         if out.candidates.len() > first {
+            out.lines.push((i, first, out.candidates.len()));
             return;
         }
         // No candidate: "no overlap" if some wall passed the gate, else "outside gate".
