@@ -93,6 +93,12 @@ impl Robot {
         self.pose
     }
 
+    /// Carries the robot: its true pose moves by `by` (in its own frame) while the
+    /// wheels do not turn, so the encoders see nothing (a kidnapping).
+    pub fn carry(&mut self, by: &Pose2<f64>) {
+        self.pose = self.pose.compose(by);
+    }
+
     /// Slip events so far.
     pub fn slips(&self) -> u32 {
         self.slips

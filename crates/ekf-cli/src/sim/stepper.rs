@@ -56,6 +56,14 @@ impl<'s> Simulator<'s> {
         self.robot.pose()
     }
 
+    /// Carries the robot by `by` (in its own frame) without a wheel turning (a
+    /// kidnapping, for testing a localizer's recovery); the follower then rejoins the
+    /// path from where the robot was put down.
+    pub fn carry(&mut self, by: &Pose2<f64>) {
+        self.robot.carry(by);
+        self.follower.join(&self.scenario.path, &self.robot.pose());
+    }
+
     /// Slip events so far.
     pub fn slips(&self) -> u32 {
         self.robot.slips()
