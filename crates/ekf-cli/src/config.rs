@@ -424,6 +424,21 @@ mod tests {
     }
 
     #[test]
+    fn a_partial_table_takes_the_defaults_for_the_keys_it_leaves_out() {
+        let text = "[localizer.robot]\ntrack = 0.5\n\n[localizer.odometry_noise]\na1 = 0.2\n\n\
+                    [localizer.wheel_noise]\ndelta = 0.02\n";
+        let c = Config::from_toml(text, "robot.toml").unwrap();
+        let mut want = Config::default();
+        want.localizer.robot.track = 0.5;
+        want.localizer.odometry_noise.a1 = 0.2;
+        want.localizer.wheel_noise.delta = 0.02;
+        assert_eq!(c, want);
+        // An unknown key in a partial table is still an error.
+        let err = Config::from_toml("[localizer.robot]\ntrak = 0.5\n", "robot.toml").unwrap_err();
+        assert!(err.to_string().contains("unknown field `trak`"), "{err}");
+    }
+
+    #[test]
     fn errors_name_line_and_key() {
         let err = Config::from_toml("[initial]\nx = 1.0\nsigma_xx = 2.0\n", "robot.toml")
             .unwrap_err()

@@ -4,10 +4,18 @@ use crate::validate::{finite, positive};
 use crate::{Error, Pose2, Real};
 use nalgebra::{Matrix3, Matrix3x2};
 
-/// The robot's wheel geometry.
+/// The robot's wheel geometry. A field missing when deserialized takes the default's
+/// (the paper's robot).
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-#[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
+#[cfg_attr(
+    feature = "serde",
+    serde(
+        default,
+        deny_unknown_fields,
+        bound(deserialize = "T: Real + serde::Deserialize<'de>")
+    )
+)]
 pub struct DiffDrive<T> {
     /// Radius of the driven wheels, `R` (m).
     pub wheel_radius: T,
@@ -53,6 +61,13 @@ impl<T: Real> WheelSpeeds<T> {
         finite(dphi_right, "right wheel increment")?;
         positive(dt, "dt")?;
         Self::new(dphi_left / dt, dphi_right / dt, dt)
+    }
+}
+
+impl<T: Real> Default for DiffDrive<T> {
+    /// The paper's robot ([`DiffDrive::paper`]).
+    fn default() -> Self {
+        Self::paper()
     }
 }
 

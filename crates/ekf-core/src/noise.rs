@@ -12,10 +12,18 @@ use nalgebra::{Matrix2, Matrix3};
 /// that alone a robot whose wheels barely turn gains no uncertainty at all, although its
 /// encoders quantise and its wheels slip; the floor `σ₀²` models that. A 500-tick encoder
 /// sampled every 0.1 s resolves ω to 2π/500/0.1 ≈ 0.126 rad/s, whose uniform quantisation
-/// error has σ ≈ 0.036 rad/s: the default floor.
+/// error has σ ≈ 0.036 rad/s: the default floor. A field missing when deserialized takes
+/// the default's.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-#[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
+#[cfg_attr(
+    feature = "serde",
+    serde(
+        default,
+        deny_unknown_fields,
+        bound(deserialize = "T: Real + serde::Deserialize<'de>")
+    )
+)]
 pub struct WheelNoise<T> {
     /// Proportional factor δ (dimensionless): variance `δ·ω²`. Paper: 0.01.
     pub delta: T,
@@ -77,10 +85,18 @@ impl<T: Real> Default for WheelNoise<T> {
 ///
 /// The constant terms `b` model what proportional terms miss (slip, timing). They apply
 /// only to steps where the robot moved: a robot at rest with zero odometry delta gains no
-/// uncertainty, however often its odometry is published.
+/// uncertainty, however often its odometry is published. A field missing when
+/// deserialized takes the default's.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
-#[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
+#[cfg_attr(
+    feature = "serde",
+    serde(
+        default,
+        deny_unknown_fields,
+        bound(deserialize = "T: Real + serde::Deserialize<'de>")
+    )
+)]
 pub struct OdometryNoise<T> {
     /// `a₁`: distance noise per metre travelled (m/m).
     pub a1: T,

@@ -7,7 +7,8 @@ use serde::{Deserialize, Serialize};
 
 /// Everything a [`Localizer`](super::Localizer) needs besides the initial state and the
 /// map. Missing groups or fields in a config file take the defaults below
-/// (`#[serde(default)]`); `robot` must be given whole if given.
+/// (`#[serde(default)]`, down to the fields of `robot`, `wheel_noise` and
+/// `odometry_noise`); `laser_mount` is a pose and is given whole.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct LocalizerConfig {
