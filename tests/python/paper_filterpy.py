@@ -93,7 +93,7 @@ def line_h(x, wall):
 
 
 def line_jacobian(x, wall):
-    """H = dh/dx of line_h (DESIGN erratum 2: dr/d(x, y) = -sign(C) (cos b, sin b))."""
+    """H = dh/dx of line_h (docs/ERRATA.md 2: dr/d(x, y) = -sign(C) (cos b, sin b))."""
     (xs, ys, _), (dxs, dys) = sensor_pose(x)
     rho, beta = wall
     cb, sb = math.cos(beta), math.sin(beta)

@@ -110,7 +110,7 @@ impl Default for GpsConfig {
     }
 }
 
-/// Topic names (DESIGN.md §5 defaults).
+/// Topic names (docs/ARCHITECTURE.md §4 defaults).
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct Topics {

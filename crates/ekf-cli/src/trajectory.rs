@@ -2,7 +2,7 @@
 //! evaluation compares.
 //!
 //! Chosen layout: one `Vec<StampedPose>` (array of structs), so a stamp can never lose its
-//! pose. Stamps are integer nanoseconds (DESIGN §3), so they survive file round trips
+//! pose. Stamps are integer nanoseconds (docs/ARCHITECTURE.md §2), so they survive file round trips
 //! exactly. The order of the samples is the order they were pushed or read; nothing here
 //! sorts or de-duplicates them.
 

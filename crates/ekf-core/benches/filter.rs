@@ -1,4 +1,4 @@
-//! Criterion benchmarks of the filter steps (DESIGN §7 target: predict + compass + 4
+//! Criterion benchmarks of the filter steps (docs/ARCHITECTURE.md §6 target: predict + compass + 4
 //! lines ≤ 1 µs). Run: `cargo bench -p ekf-core --bench filter`.
 
 use core::f64::consts::{FRAC_PI_2, PI};

@@ -110,7 +110,7 @@ impl<T: Real> DiffDrive<T> {
         Matrix3x2::new(half, half, T::zero(), T::zero(), turn, -turn)
     }
 
-    /// The corrected input Jacobian `W = ∂f/∂(ω_R, ω_L)` of eq. 8 (DESIGN erratum 1:
+    /// The corrected input Jacobian `W = ∂f/∂(ω_R, ω_L)` of eq. 8 (docs/ERRATA.md 1:
     /// the third row is `(Δt·R/L, −Δt·R/L)`, twice the paper's printed value), computed as
     /// `W = G·J` ([`Motion::noise_jacobian`], [`DiffDrive::wheel_to_motion_jacobian`]).
     /// Columns are ordered `(ω_R, ω_L)` as in the paper's `Q = diag(δω_R², δω_L²)`.

@@ -51,8 +51,8 @@ impl<T: Real> CompassCalibration<T> {
 pub struct Compass<T> {
     /// Measured heading in the map frame (rad), wrapped.
     pub heading: T,
-    /// Its variance (rad²). The paper's "0.1° accuracy" is (0.1°)² = 3.05e-6 rad² (DESIGN
-    /// erratum 3); a real CMPS03 is good to a few degrees.
+    /// Its variance (rad²). The paper's "0.1° accuracy" is (0.1°)² = 3.05e-6 rad²
+    /// (docs/ERRATA.md 3); a real CMPS03 is good to a few degrees.
     pub variance: T,
 }
 
@@ -97,7 +97,7 @@ impl<T: Real> Measurement<T, 1> for Compass<T> {
 /// With the sensor pose `s = x ⊕ mount`:
 /// `C = ρ − x_s cos β − y_s sin β`, `r̂ = |C|`, `ψ̂ = β − θ_s (+π if C < 0)` (eqs. 17–18;
 /// the paper's `+π/2` is its SICK mounting, `mount.theta = −π/2`). The Jacobian is
-/// `∂r̂/∂(x, y) = −sign(C)(cos β, sin β)` (DESIGN erratum 2: the paper prints `−C cos β`),
+/// `∂r̂/∂(x, y) = −sign(C)(cos β, sin β)` (docs/ERRATA.md 2: the paper prints `−C cos β`),
 /// `∂r̂/∂θ = sign(C)·∂C/∂θ` (zero for a laser at the robot origin), `∂ψ̂/∂(x, y, θ) = (0, 0, −1)`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LaserLine<T> {

@@ -222,7 +222,7 @@ fn refused_inputs_leave_the_state_unchanged() {
         "gate dof must match"
     );
     assert_eq!(ekf, before);
-    // Negative or indefinite process noise (DESIGN: refused, state unchanged).
+    // Negative or indefinite process noise (refused, state unchanged).
     let negative = Matrix3::from_diagonal(&nalgebra::Vector3::new(-1.0, 0.0, 0.0));
     assert_eq!(
         ekf.predict(&Motion::new(0.1, 0.0).unwrap(), &negative),

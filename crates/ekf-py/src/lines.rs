@@ -186,7 +186,7 @@ pub fn finite_range_max(range_max: f64) -> f64 {
     }
 }
 
-/// Extracts the lines of one laser scan (DESIGN §4): split-and-merge over the valid
+/// Extracts the lines of one laser scan (docs/ARCHITECTURE.md §3): split-and-merge over the valid
 /// readings, a weighted least-squares fit per segment with the inverse Fisher information
 /// as covariance, and chi-square merging of collinear neighbours.
 ///

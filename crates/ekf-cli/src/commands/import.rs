@@ -1,6 +1,6 @@
 //! `ekf import carmen|mrpt LOG --out LOG.mcap`: a CARMEN or MRPT text log as a ROS 2 bag.
 //!
-//! Records become messages on the default topics of DESIGN.md §5: raw odometry →
+//! Records become messages on the default topics of docs/ARCHITECTURE.md §4: raw odometry →
 //! `/odom` (`nav_msgs/Odometry`, frame `odom` → `base_link`), scans → `/scan`
 //! (`sensor_msgs/LaserScan`, frame `laser`) with the laser's mounting pose on
 //! `/tf_static` (`base_link` → `laser`, written again only if it changes), reference poses

@@ -3,7 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
-/// Serial devices of the paper's robot (DESIGN.md §6).
+/// Serial devices of the paper's robot (docs/ARCHITECTURE.md §5).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct DevicesConfig {

@@ -1,4 +1,4 @@
-//! The paper's robot devices on serial lines (DESIGN.md §6): the SICK LMS 2xx laser, the
+//! The paper's robot devices on serial lines (docs/ARCHITECTURE.md §5): the SICK LMS 2xx laser, the
 //! dsPIC base controller on MODBUS RTU (encoders and the CMPS03 compass), and an NMEA GPS.
 //! Each protocol is a sans-I/O part (bytes in, values out) plus a small driver over a
 //! [`Link`]; the device side of each protocol, for the emulators, lives next to it.

@@ -1,6 +1,6 @@
 //! The simulator's readings as the robot's devices report them (`docs/devices.md`):
 //! encoder counts in the base controller's 32-bit registers, the compass as a CMPS03
-//! bearing (clockwise from north; the simulator's heading is an ENU yaw, DESIGN §3), the
+//! bearing (clockwise from north; the simulator's heading is an ENU yaw, docs/ARCHITECTURE.md §2), the
 //! laser's ranges as a sweep the SICK turns into millimetres, and a GPS fix about an
 //! origin on the globe, or none.
 

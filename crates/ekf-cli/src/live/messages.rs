@@ -1,4 +1,4 @@
-//! Raw device readings as the ROS 2 messages of DESIGN.md §5, and as the bag messages
+//! Raw device readings as the ROS 2 messages of docs/ARCHITECTURE.md §4, and as the bag messages
 //! the filter loop takes: what is recorded is exactly what is fused.
 
 use crate::config::Config;

@@ -1,5 +1,5 @@
 //! `ekf live`: the filter on the robot's serial devices. Readings become the ROS 2
-//! messages of DESIGN.md §5, are recorded (with `/tf_static` for the laser mount and the
+//! messages of docs/ARCHITECTURE.md §4, are recorded (with `/tf_static` for the laser mount and the
 //! estimates) and fed to the same filter loop as `ekf replay`, so a replay of the
 //! recording gives the same poses bit for bit. Devices that fail are reported and
 //! reconnected with backoff; a device silent at start-up is an error naming its port.

@@ -256,7 +256,7 @@ pub fn heading_from_imu(
 
 /// A calibrated magnetometer reading: the field's horizontal direction in the robot frame
 /// is magnetic north, so the bearing (clockwise from magnetic north) is
-/// `atan2(m_y, m_x)`, and the map heading follows DESIGN §3.
+/// `atan2(m_y, m_x)`, and the map heading follows docs/ARCHITECTURE.md §2.
 pub fn heading_from_magnetic_field(
     msg: &MagneticField,
     calibration: &CompassCalibrationConfig,

@@ -1,4 +1,4 @@
-//! Builders of the messages a robot log holds, in the frames of DESIGN.md §5, shared by
+//! Builders of the messages a robot log holds, in the frames of docs/ARCHITECTURE.md §4, shared by
 //! the importers and the simulator so both write the same layout.
 
 use super::builtin_interfaces::Time;

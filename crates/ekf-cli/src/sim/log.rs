@@ -1,4 +1,4 @@
-//! Writes a simulated run as a ROS 2 bag with the topics of DESIGN.md §5: wheel encoder
+//! Writes a simulated run as a ROS 2 bag with the topics of docs/ARCHITECTURE.md §4: wheel encoder
 //! angles on `/joint_states`, the compass on `/compass` (`sensor_msgs/Imu`, with the
 //! compass's variance), sweeps on `/scan`, the laser mount on `/tf_static`, and the true
 //! pose on `/ground_truth`; plus an MCAP metadata record `simulation` naming the scenario,

@@ -31,7 +31,7 @@ impl Default for CompassModel {
 }
 
 impl CompassModel {
-    /// The compass as the paper specifies it (§IV: "accuracy of 0.1°"; DESIGN erratum 3),
+    /// The compass as the paper specifies it (§IV: "accuracy of 0.1°"; docs/ERRATA.md 3),
     /// with the same 2 % outliers.
     pub fn paper() -> Self {
         Self {

@@ -1,6 +1,6 @@
 //! Line extraction from one laser scan: split-and-merge over the scan's points, a
 //! weighted least-squares fit with an honest 2×2 covariance per line, and merging of
-//! adjacent collinear lines by a chi-square test (DESIGN.md §4).
+//! adjacent collinear lines by a chi-square test (docs/ARCHITECTURE.md §3).
 //!
 //! The pipeline, one private module per step: `points` (beams → points indexed by beam,
 //! runs of valid ones cut at invalid beams and gaps) → `split` (iterative end-point fit)

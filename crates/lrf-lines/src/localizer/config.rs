@@ -88,7 +88,7 @@ impl Default for CompassConfig {
 
 impl CompassConfig {
     /// The paper's compass: "0.1° accuracy", i.e. variance `(0.1°)² = 3.05e-6 rad²`
-    /// (DESIGN erratum 3: the paper's "0.01" is in degrees²); gate and recovery as the
+    /// (docs/ERRATA.md 3: the paper's "0.01" is in degrees²); gate and recovery as the
     /// default.
     pub fn paper() -> Self {
         let sigma = 0.1_f64.to_radians();

@@ -1,5 +1,5 @@
 //! Maps of wall segments in the world frame: the global map that observed laser lines are
-//! matched against (DESIGN §4 "Global map"), built from one scan, from a whole run, or
+//! matched against (docs/ARCHITECTURE.md §3 "Global map"), built from one scan, from a whole run, or
 //! loaded from a JSON file (format in `docs/map-format.md`).
 
 mod builder;

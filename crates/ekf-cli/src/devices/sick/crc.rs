@@ -25,7 +25,7 @@ pub fn crc16(bytes: &[u8]) -> u16 {
 mod tests {
     use super::*;
 
-    /// DESIGN.md §6: whole frames whose last two bytes are the CRC of the rest.
+    /// docs/ARCHITECTURE.md §5: whole frames whose last two bytes are the CRC of the rest.
     #[test]
     fn design_test_vectors() {
         let frames: [&[u8]; 3] = [

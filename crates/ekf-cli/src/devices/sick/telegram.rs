@@ -1,5 +1,5 @@
 //! LMS 2xx telegrams: `STX ADR LEN(u16 LE) CMD DATA… [STATUS] CRC(u16 LE)`, the requests
-//! the host sends and the replies it reads (DESIGN.md §6).
+//! the host sends and the replies it reads (docs/ARCHITECTURE.md §5).
 
 use super::crc::crc16;
 use std::time::Duration;
