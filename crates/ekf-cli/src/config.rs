@@ -416,6 +416,10 @@ mod tests {
         assert!((c.localizer.compass.variance - 2f64.to_radians().powi(2)).abs() < 1e-15);
         let d = Config::default();
         assert_eq!((c.topics, c.localizer.robot), (d.topics, d.localizer.robot));
+        // The start of `ekf simulate --scenario paper`.
+        let start = crate::sim::Scenario::builtin("paper").unwrap().start;
+        let i = &c.initial;
+        assert_eq!((i.x, i.y, i.theta), (start.x, start.y, start.theta));
         let err = Config::preset("mars-rover").unwrap_err().to_string();
         assert!(
             err.contains("\"mars-rover\"") && err.contains("paper-robot"),

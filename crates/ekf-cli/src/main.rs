@@ -426,6 +426,9 @@ fn print_replay_table(s: &replay::ReplaySummary) {
             s.warning_count, s.warnings[0].topic, s.warnings[0].log_time_ns, s.warnings[0].reason
         );
     }
+    for note in &s.notes {
+        println!("  note: {note}");
+    }
     println!("  wall time {:.2} s", s.wall_time_s);
 }
 

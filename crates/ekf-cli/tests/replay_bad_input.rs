@@ -47,12 +47,24 @@ fn laser_mode_without_scans_lists_the_topics_the_log_has() {
         ..short()
     };
     let (log, _) = write_scenario(dir.path(), "noscan.mcap", &s);
-    for mode in ["laser", "laser+compass"] {
+    let hints = [
+        (
+            "laser",
+            "name the log's topic in the config's [topics] table",
+        ),
+        (
+            "laser+compass",
+            "mode compass (--mode compass) needs no laser, or name the laser's topic in \
+             [topics] scan",
+        ),
+    ];
+    for (mode, hint) in hints {
         let (stdout, stderr) = replay_fails(&[p(&log), "--mode", mode]);
         assert_eq!(
             stderr,
             format!(
-                "ekf: error: {}: no topic /scan (laser scans); the log has: {ALL_BUT_SCAN}\n",
+                "ekf: error: {}: no topic /scan (laser scans); the log has: {ALL_BUT_SCAN}; \
+                 {hint}\n",
                 p(&log)
             ),
             "{mode}"
@@ -72,16 +84,31 @@ fn compass_mode_without_compass_lists_the_topics_the_log_has() {
         ..short()
     };
     let (log, _) = write_scenario(dir.path(), "nocompass.mcap", &s);
+    let topics = "/ground_truth (nav_msgs/msg/Odometry), /joint_states \
+                  (sensor_msgs/msg/JointState), /scan (sensor_msgs/msg/LaserScan), /tf_static \
+                  (tf2_msgs/msg/TFMessage)";
     let (_, stderr) = replay_fails(&[p(&log), "--mode", "compass"]);
     assert_eq!(
         stderr,
         format!(
-            "ekf: error: {}: no topic /compass (compass); the log has: \
-             /ground_truth (nav_msgs/msg/Odometry), /joint_states (sensor_msgs/msg/JointState), \
-             /scan (sensor_msgs/msg/LaserScan), /tf_static (tf2_msgs/msg/TFMessage)\n",
+            "ekf: error: {}: no topic /compass (compass); the log has: {topics}; mode odometry \
+             (--mode odometry) needs no compass, or name the compass's topic in [topics] \
+             compass\n",
             p(&log)
         )
     );
+    // The default mode (laser + compass) says how to go without the compass.
+    let (_, stderr) = replay_fails(&[p(&log)]);
+    assert_eq!(
+        stderr,
+        format!(
+            "ekf: error: {}: no topic /compass (compass); the log has: {topics}; mode laser \
+             (--mode laser) needs no compass, or name the compass's topic in [topics] compass\n",
+            p(&log)
+        )
+    );
+    let s = replay_json(&log, &["--mode", "laser"]);
+    assert_eq!(s["motion_steps"], 40);
 }
 
 #[test]
@@ -98,7 +125,8 @@ fn a_log_with_neither_joint_states_nor_odometry_names_both_and_lists_its_topics(
         format!(
             "ekf: error: {}: no topic /joint_states or /odom (wheel joint states or odometry); \
              the log has: /compass (sensor_msgs/msg/Imu), /ground_truth (nav_msgs/msg/Odometry), \
-             /scan (sensor_msgs/msg/LaserScan), /tf_static (tf2_msgs/msg/TFMessage)\n",
+             /scan (sensor_msgs/msg/LaserScan), /tf_static (tf2_msgs/msg/TFMessage); name the \
+             log's topic in the config's [topics] table\n",
             p(&log)
         )
     );
@@ -125,7 +153,7 @@ fn an_empty_log_says_it_has_no_topics() {
         stderr,
         format!(
             "ekf: error: {}: no topic /joint_states or /odom (wheel joint states or odometry); \
-             the log has: no topics\n",
+             the log has: no topics; name the log's topic in the config's [topics] table\n",
             p(&log)
         )
     );
@@ -358,4 +386,25 @@ fn wrong_joint_names_list_the_joints_the_message_has() {
     .expect("write config");
     let s = replay_json(&log, &["--mode", "odometry", "--config", p(&config)]);
     assert_eq!(s["motion_steps"], 40);
+}
+
+#[test]
+fn a_reference_under_another_name_is_pointed_out_not_silently_missing() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let (log, _) = write_scenario(dir.path(), "ref.mcap", &short());
+    let config = dir.path().join("truth.toml");
+    std::fs::write(&config, "[topics]\nground_truth = \"/truth\"\n").expect("write config");
+    let s = replay_json(&log, &["--mode", "compass", "--config", p(&config)]);
+    assert_eq!(s["accuracy"], serde_json::Value::Null);
+    assert_eq!(
+        s["notes"],
+        serde_json::json!([
+            "no reference on /truth, so no accuracy; if /ground_truth is the reference, name \
+             it in [topics] ground_truth"
+        ])
+    );
+    // With the reference found, nothing to say.
+    let s = replay_json(&log, &["--mode", "compass"]);
+    assert!(s["accuracy"].is_object());
+    assert_eq!(s["notes"], serde_json::json!([]));
 }

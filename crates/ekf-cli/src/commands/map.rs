@@ -65,6 +65,7 @@ pub fn build_map(
             topic: topics.scan.clone(),
             role: "laser scans",
             available: bag.describe_topics(),
+            hint: crate::replay::TOPIC_HINT,
         });
     }
     let needs_reference = matches!(

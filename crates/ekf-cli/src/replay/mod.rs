@@ -110,7 +110,7 @@ pub enum ReplayError {
     #[error(transparent)]
     Read(#[from] ReadError),
     /// A topic the mode needs is not in the log.
-    #[error("{log}: no topic {topic} ({role}); the log has: {available}")]
+    #[error("{log}: no topic {topic} ({role}); the log has: {available}{hint}")]
     MissingTopic {
         /// The log.
         log: String,
@@ -120,6 +120,8 @@ pub enum ReplayError {
         role: &'static str,
         /// The topics the log has, with their types.
         available: String,
+        /// What to do about it, if there is a way (empty or starting with a separator).
+        hint: &'static str,
     },
     /// A topic carries a type the replay cannot use for its role.
     #[error("{log}: topic {topic} has type {actual}; expected {expected}")]
@@ -261,11 +263,12 @@ pub fn replay(
             .map(|t| t.type_name.clone())
     };
     let available = || bag.describe_topics();
-    let missing = |topic: &str, role: &'static str| ReplayError::MissingTopic {
+    let missing = |topic: &str, role: &'static str, hint: &'static str| ReplayError::MissingTopic {
         log: log_name.clone(),
         topic: topic.into(),
         role,
         available: available(),
+        hint,
     };
     let check_type =
         |topic: &str, expected: &[&str], what: &'static str| -> Result<(), ReplayError> {
@@ -300,7 +303,7 @@ pub fn replay(
             MotionSource::JointStates => (motion_topic.clone(), "wheel joint states"),
             MotionSource::Odom => (motion_topic.clone(), "odometry"),
         };
-        return Err(missing(&topic, role));
+        return Err(missing(&topic, role, TOPIC_HINT));
     }
     check_type(
         &t.joint_states,
@@ -320,10 +323,23 @@ pub fn replay(
         "nav_msgs/msg/Odometry or geometry_msgs/msg/PoseStamped",
     )?;
     if options.mode.uses_laser() && topic_type(&t.scan).is_none() {
-        return Err(missing(&t.scan, "laser scans"));
+        let hint = if options.mode == Mode::LaserCompass {
+            "; mode compass (--mode compass) needs no laser, or name the laser's topic in \
+             [topics] scan"
+        } else {
+            TOPIC_HINT
+        };
+        return Err(missing(&t.scan, "laser scans", hint));
     }
     if options.mode.uses_compass() && topic_type(&t.compass).is_none() {
-        return Err(missing(&t.compass, "compass"));
+        let hint = if options.mode == Mode::LaserCompass {
+            "; mode laser (--mode laser) needs no compass, or name the compass's topic in \
+             [topics] compass"
+        } else {
+            "; mode odometry (--mode odometry) needs no compass, or name the compass's topic \
+             in [topics] compass"
+        };
+        return Err(missing(&t.compass, "compass", hint));
     }
 
     let preamble = read_preamble(&bag, config, options.init_from_truth)?;
@@ -335,6 +351,25 @@ pub fn replay(
         &log_name,
         motion_topic,
     )?;
+    if topic_type(&t.ground_truth).is_none() {
+        // A log without a reference is normal; one whose reference is under another name
+        // would silently report no accuracy.
+        let candidates: Vec<&str> = bag
+            .topics()
+            .iter()
+            .filter(|c| c.topic != *motion_topic)
+            .filter(|c| REFERENCE.iter().any(|r| type_name_matches(r, &c.type_name)))
+            .map(|c| c.topic.as_str())
+            .collect();
+        if !candidates.is_empty() {
+            run.summary.notes.push(format!(
+                "no reference on {}, so no accuracy; if {} is the reference, name it in \
+                 [topics] ground_truth",
+                t.ground_truth,
+                candidates.join(" or ")
+            ));
+        }
+    }
     let total: u64 = bag.topics().iter().map(|t| t.message_count).sum();
     let mut failure = None;
     let mut done = 0;
@@ -433,6 +468,9 @@ pub(crate) fn reference_pose(message: &BagMessage) -> Option<Pose2<f64>> {
         _ => None,
     }
 }
+
+/// What to do about a missing topic the mode cannot do without.
+pub(crate) const TOPIC_HINT: &str = "; name the log's topic in the config's [topics] table";
 
 /// Longest gap over which the state is brought forward at the last motion rate.
 const MAX_EXTRAPOLATION_NS: u64 = 200_000_000;

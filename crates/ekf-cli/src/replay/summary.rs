@@ -197,6 +197,9 @@ pub struct ReplaySummary {
     pub warnings: Vec<Warning>,
     /// Accuracy against the reference, when the log has one.
     pub accuracy: Option<Accuracy>,
+    /// What about the log or the configuration a user may want to act on, e.g. a
+    /// reference trajectory under another topic name.
+    pub notes: Vec<String>,
 }
 
 /// Most warnings kept verbatim in the summary.
