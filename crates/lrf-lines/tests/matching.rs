@@ -137,6 +137,13 @@ fn parallel_walls_are_told_apart_by_overlap() {
         .starts_with("no overlap"));
 }
 
+/// The NIS of pairing `line` with `wall` alone, as the matcher gates it.
+fn pair_nis(ekf: &Ekf<f64>, line: &ObservedLine, wall: &MapSegment) -> f64 {
+    let noise = matcher().params().line_noise(&line.covariance);
+    let m = LaserLine::new(line.line, noise, wall.line, mount()).unwrap();
+    ekf.innovation(&m).unwrap().nis
+}
+
 /// The joint NIS `D² = yᵀ S⁻¹ y` of matches stacked, `S = H P Hᵀ + R`, computed in one
 /// batch at the state matching ran at.
 fn batch_joint_nis(out: &MatchResult, p: &Matrix3<f64>) -> f64 {
@@ -170,12 +177,7 @@ fn lines_are_paired_so_that_one_pose_explains_them_all() {
     // The filter believes the robot 0.65 m to the right, with σ = 0.6 m.
     let p = Matrix3::from_diagonal(&Vector3::new(0.36, 0.36, 2.0_f64.to_radians().powi(2)));
     let ekf = Ekf::new(Pose2::new(3.0, -0.65, 0.0), p).unwrap();
-    let nis = |i: usize, j: usize| {
-        let o = &observed[i];
-        let noise = matcher().params().line_noise(&o.covariance);
-        let m = LaserLine::new(o.line, noise, map.segments[j].line, mount()).unwrap();
-        ekf.innovation(&m).unwrap().nis
-    };
+    let nis = |i: usize, j: usize| pair_nis(&ekf, &observed[i], &map.segments[j]);
     // Each line alone fits: the right line even fits the wall beyond better than its own,
     // so the nearest wall of each line would put the robot both up and down at once.
     assert!(nis(1, 2) < nis(1, 1) && nis(1, 1) < 9.21 && nis(0, 0) < 9.21);
@@ -195,12 +197,7 @@ fn lines_are_paired_so_that_one_pose_explains_them_all() {
     let boxes: Wall = (Point2::new(0.0, -0.35), Point2::new(10.0, -0.35));
     let mut with_boxes = observed.clone();
     with_boxes.push(see(&[boxes], &truth)[0]);
-    let box_nis = {
-        let o = &with_boxes[2];
-        let noise = matcher().params().line_noise(&o.covariance);
-        let m = LaserLine::new(o.line, noise, map.segments[1].line, mount()).unwrap();
-        ekf.innovation(&m).unwrap().nis
-    };
+    let box_nis = pair_nis(&ekf, &with_boxes[2], &map.segments[1]);
     assert!(
         box_nis < nis(1, 1),
         "the boxes fit the right wall best: {box_nis}"
