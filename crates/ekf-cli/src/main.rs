@@ -426,6 +426,13 @@ fn print_replay_table(s: &replay::ReplaySummary) {
             s.warning_count, s.warnings[0].topic, s.warnings[0].log_time_ns, s.warnings[0].reason
         );
     }
+    let c = &s.consistency;
+    if let Some(nis) = c.nis_per_dof {
+        println!(
+            "  line innovations: NIS per dof {nis:.2}; over-confident on {} of {} scans ({} stretches)",
+            c.over_confident_scans, c.scans, c.over_confident_stretches
+        );
+    }
     for note in &s.notes {
         println!("  note: {note}");
     }

@@ -255,7 +255,7 @@ fn a_map_line_is_used_once_by_the_best_fitting_line() {
     assert!(out.rejections()[0]
         .reason
         .to_string()
-        .contains("already taken by a better match"));
+        .contains("map line 0 went to observed line 1"));
 }
 
 #[test]

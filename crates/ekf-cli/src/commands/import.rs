@@ -227,8 +227,8 @@ pub fn repair_lines(stats: &ImportStats) -> Vec<String> {
     if r.clock_broken {
         lines.push(format!(
             "the log's clock is broken throughout (its stamps do not advance); every record \
-             has a synthetic time in file order, {} s apart (a scan at the time of the \
-             odometry record stamped like it)",
+             has a synthetic time in file order, {} s apart (a scan directly after an \
+             odometry record at that record's time)",
             SYNTHETIC_STEP_NS as f64 * 1e-9
         ));
     }

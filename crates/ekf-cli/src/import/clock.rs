@@ -9,15 +9,15 @@
 //! with a stamp of their own decide whether the clock can be trusted at all:
 //!
 //! * **Broken throughout** when fewer than half of the stamps in that window are positive
-//!   times, or fewer than half of the consecutive positive ones increase (CARMEN logs whose stamps are all 0, run backwards, or are printed with six
-//!   significant digits so that thousands of records share one value). Every record then
-//!   gets `k · SYNTHETIC_STEP_NS` (its place `k` = 1, 2, … in the file), and the summary
-//!   says so. One exception keeps what the file does say: a sensor record whose raw stamp
-//!   equals that of the odometry record just before it was taken at that odometry's
-//!   instant (CARMEN writes every scan with the stamp of the odometry pose it was taken
-//!   at, even where the clock itself is useless), so it shares that record's time. Replay
-//!   then fuses the scan where the odometry left the robot instead of carrying the robot
-//!   on for another step at its last rate.
+//!   times, or fewer than half of the consecutive positive ones increase (CARMEN logs
+//!   whose stamps are all 0, run backwards, or are printed with six significant digits so
+//!   that thousands of records share one value). The records then get synthetic times in
+//!   file order, `SYNTHETIC_STEP_NS` apart, and the summary says so; but a sensor record
+//!   directly after an odometry record shares that record's time. Without a clock nothing
+//!   says that time passed between the two, and where CARMEN's clock works every scan
+//!   carries the stamp of the odometry record before it (4,225 of 4,225 in the nine
+//!   shared logs). Replay then fuses the scan where the odometry left the robot instead of
+//!   carrying the robot on for another step at its last rate.
 //! * **Otherwise** a stamp is *good* when it is a positive time not before the last good
 //!   stamp. A record with a bad stamp (negative, 0, a non-zero value below 1 ns such as
 //!   `8.97e-67`, or earlier than the last good stamp) waits for the next good stamp; the
@@ -105,8 +105,8 @@ impl RepairCount {
 #[derive(Debug, Clone, Default, PartialEq, Eq, Serialize)]
 pub struct TimeRepairs {
     /// The clock was judged broken throughout: every record has a synthetic time in file
-    /// order, [`SYNTHETIC_STEP_NS`] apart (a sensor record stamped like the odometry
-    /// record before it shares its time). The other counts stay 0 then.
+    /// order, [`SYNTHETIC_STEP_NS`] apart (a sensor record directly after an odometry
+    /// record shares its time). The other counts stay 0 then.
     pub clock_broken: bool,
     /// Negative stamps repaired.
     pub negative: RepairCount,
@@ -165,10 +165,10 @@ pub(crate) struct ClockRepair {
     anchor_ns: Option<u64>,
     /// The time given to the last record.
     last_ns: u64,
-    /// Records with their own stamp placed so far (broken mode).
+    /// Synthetic steps taken so far (broken mode).
     placed: u64,
-    /// The raw stamp of the last record placed, if it was odometry (broken mode).
-    odometry_raw: Option<RawStamp>,
+    /// The last record placed with a stamp of its own was odometry (broken mode).
+    after_odometry: bool,
 }
 
 impl ClockRepair {
@@ -181,7 +181,7 @@ impl ClockRepair {
             anchor_ns: None,
             last_ns: 0,
             placed: 0,
-            odometry_raw: None,
+            after_odometry: false,
         }
     }
 
@@ -223,14 +223,13 @@ impl ClockRepair {
     pub(crate) fn place(&mut self, entry: Entry, out: &mut Output) -> Result<(), ImportError> {
         match self.mode {
             Some(Mode::Broken) => {
-                if let Stamp::Own { raw, .. } = entry.stamp {
+                if matches!(entry.stamp, Stamp::Own { .. }) {
                     let odometry = matches!(entry.record, ImportRecord::Odometry(_));
-                    let with_odometry = !odometry && self.odometry_raw == Some(raw);
-                    if !with_odometry {
+                    if odometry || !self.after_odometry {
                         self.placed += 1;
                         self.last_ns = self.placed * SYNTHETIC_STEP_NS;
                     }
-                    self.odometry_raw = odometry.then_some(raw);
+                    self.after_odometry = odometry;
                 }
                 self.emit(entry.record, self.last_ns, out);
             }
@@ -458,7 +457,7 @@ mod tests {
     }
 
     #[test]
-    fn a_broken_clock_keeps_a_scan_at_the_instant_of_its_odometry() {
+    fn a_broken_clock_keeps_a_scan_at_the_instant_of_the_odometry_before_it() {
         use RawStamp::*;
         let t = Valid(7 * S);
         let scan = |line, raw| Entry {
@@ -479,8 +478,8 @@ mod tests {
                 name: "timestamp",
             },
         };
-        // odometry, scan (same raw stamp), odometry, scan, scan (no odometry between),
-        // odometry, scan with another stamp.
+        // odometry, scan, odometry, scan, scan (no odometry between), odometry, scan
+        // (whatever its stamp says).
         let entries = vec![
             entry(1, t),
             scan(2, t),
@@ -498,7 +497,7 @@ mod tests {
         }
         let times: Vec<u64> = out.queue.iter().map(ImportRecord::t_ns).collect();
         assert!(out.stats.time_repairs.clock_broken);
-        assert_eq!(times, [1, 1, 2, 2, 3, 4, 5].map(|k| k * SYNTHETIC_STEP_NS));
+        assert_eq!(times, [1, 1, 2, 2, 3, 4, 4].map(|k| k * SYNTHETIC_STEP_NS));
     }
 
     #[test]

@@ -11,6 +11,7 @@
 //! failure is returned next to the results ([`ReplayOutcome::failure`]).
 
 pub mod accuracy;
+pub mod consistency;
 pub mod inputs;
 pub mod outputs;
 mod sink;
@@ -472,7 +473,8 @@ pub(crate) fn reference_pose(message: &BagMessage) -> Option<Pose2<f64>> {
 /// What to do about a missing topic the mode cannot do without.
 pub(crate) const TOPIC_HINT: &str = "; name the log's topic in the config's [topics] table";
 
-/// Longest gap over which the state is brought forward at the last motion rate.
+/// Longest time after the end of the last motion message up to which the state is
+/// brought forward at that message's rate.
 const MAX_EXTRAPOLATION_NS: u64 = 200_000_000;
 
 /// One motion message's step over its whole interval.
@@ -613,6 +615,7 @@ pub(crate) struct Run<'a> {
     map_written: bool,
     gps_gate: ChiSquareGate<f64>,
     tracking: tracking::Tracking,
+    consistency: consistency::ConsistencyMonitor,
 }
 
 impl<'a> Run<'a> {
@@ -700,6 +703,7 @@ impl<'a> Run<'a> {
             } else {
                 tracking::Tracking::new(options.map.is_some())
             },
+            consistency: consistency::ConsistencyMonitor::default(),
             gps_gate: ChiSquareGate::from_probability(config.gps.gate_probability, 2).map_err(
                 |error| LocalizerError::Config {
                     group: "gps",
@@ -1039,6 +1043,7 @@ impl<'a> Run<'a> {
             };
             let gap = self.tracking.gap_before_scan(now);
             let report = self.check_tracking(&scan, now, gap, report)?;
+            self.check_consistency(now)?;
             let l = &mut self.summary.lines;
             l.scans_used += 1;
             l.extracted += report.extracted as u64;
@@ -1092,6 +1097,34 @@ impl<'a> Run<'a> {
             }
         }
         self.record_pose(now)
+    }
+
+    /// The consistency monitor after a scan's update ([`consistency`]): one
+    /// `/ekf/diagnostics` message when an over-confident stretch starts.
+    fn check_consistency(&mut self, now: u64) -> Result<(), ReplayError> {
+        let fused = self
+            .localizer
+            .last_fusions()
+            .iter()
+            .filter(|f| f.accepted)
+            .map(|f| f.nis);
+        let started = self.consistency.scan(fused, &mut self.summary.consistency);
+        if let (true, Some(out)) = (started, self.out.as_mut()) {
+            out.diagnostics(
+                now,
+                "ekf/consistency",
+                1,
+                "over-confident: the lines' innovations are larger than the covariance allows",
+                vec![
+                    ("window_scans", consistency::WINDOW_SCANS.to_string()),
+                    (
+                        "band_probability",
+                        consistency::BAND_PROBABILITY.to_string(),
+                    ),
+                ],
+            )?;
+        }
+        Ok(())
     }
 
     /// The loss monitor after a scan's update ([`tracking`]): on a motion gap, while lost,

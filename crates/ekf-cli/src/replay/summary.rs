@@ -187,6 +187,8 @@ pub struct ReplaySummary {
     pub gps: GatedCounts,
     /// Losses and relocalizations (`replay::tracking`).
     pub tracking: super::tracking::TrackingCounts,
+    /// The laser innovations' consistency (`replay::consistency`).
+    pub consistency: super::consistency::ConsistencyCounts,
     /// Per-stage timings of the scan updates.
     pub timings: Timings,
     /// Wall-clock time of the replay (s).

@@ -69,7 +69,9 @@ impl JointSearch {
     /// Searches the best jointly compatible hypothesis over `lines` (candidate ranges in
     /// `candidates`, in search order), walls taken marked in `owner` (all `None` on
     /// entry and on return), at the state covariance `p0`, gate probability
-    /// `probability`; [`best`](Self::best) then gives its candidates.
+    /// `probability`, trying at most `budget` pairs ([`NODE_BUDGET`]);
+    /// [`best`](Self::best) then gives its candidates.
+    #[allow(clippy::too_many_arguments)] // the matcher's buffers, lent for one search
     pub(super) fn run(
         &mut self,
         lines: impl Iterator<Item = (usize, usize)>,
@@ -78,6 +80,7 @@ impl JointSearch {
         p0: &Matrix3<f64>,
         probability: f64,
         owner: &mut [Option<usize>],
+        budget: usize,
     ) {
         self.lines.clear();
         self.lines.extend(lines);
@@ -96,7 +99,7 @@ impl JointSearch {
             next: 0,
         });
         let (mut best_count, mut best_nis) = (0usize, f64::INFINITY);
-        let mut budget = NODE_BUDGET;
+        let mut budget = budget;
         while let Some(&node) = self.nodes.last() {
             let depth = self.nodes.len() - 1;
             let remaining = n - depth;
@@ -128,6 +131,11 @@ impl JointSearch {
                 continue;
             }
             if budget == 0 {
+                // The path so far is a jointly compatible hypothesis too (its lines below
+                // this depth unpaired): it stands if it beats the best complete one.
+                if node.count > best_count || (node.count == best_count && node.nis < best_nis) {
+                    self.best.copy_from_slice(&self.chosen);
+                }
                 break;
             }
             budget -= 1;
@@ -213,4 +221,71 @@ fn extend(node: &Node, pair: &LineMatch, p0: &Matrix3<f64>) -> Option<Node> {
         count: node.count + 1,
         next: 0,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use ekf_core::{Ekf, LaserLine, Line, Pose2};
+    use nalgebra::Matrix2;
+
+    /// Three lines, each with one candidate wall of its own (the walls of a corner and
+    /// the wall opposite), all fitting the state exactly.
+    fn three_pairs() -> (Vec<Candidate>, Vec<LineMatch>, Matrix3<f64>) {
+        let p0 = Matrix3::identity() * 0.01;
+        let ekf = Ekf::new(Pose2::identity(), p0).unwrap();
+        let walls = [
+            Line::new(2.0, 0.0),
+            Line::new(3.0, 1.5),
+            Line::new(2.5, -1.5),
+        ];
+        let (mut candidates, mut pairs) = (Vec::new(), Vec::new());
+        for (i, wall) in walls.into_iter().enumerate() {
+            let wall = wall.unwrap();
+            let model = LaserLine {
+                observed: wall,
+                covariance: Matrix2::identity() * 1e-4,
+                map_line: wall,
+                mount: Pose2::identity(),
+            };
+            let innovation = ekf.innovation(&model).unwrap();
+            candidates.push(Candidate {
+                nis: innovation.nis,
+                observed: i,
+                map: i,
+                pair: i,
+            });
+            pairs.push(LineMatch {
+                observed: i,
+                map: i,
+                innovation,
+                overlap: 1.0,
+            });
+        }
+        (candidates, pairs, p0)
+    }
+
+    #[test]
+    fn the_path_so_far_stands_when_the_budget_runs_out_before_a_complete_hypothesis() {
+        let (candidates, pairs, p0) = three_pairs();
+        let mut search = JointSearch::default();
+        let mut owner = [None; 3];
+        let lines = || [(0, 1), (1, 2), (2, 3)].into_iter();
+        let best = |search: &JointSearch| search.best().collect::<Vec<_>>();
+        search.run(
+            lines(),
+            &candidates,
+            &pairs,
+            &p0,
+            0.99,
+            &mut owner,
+            NODE_BUDGET,
+        );
+        assert_eq!(best(&search), [0, 1, 2]);
+        assert_eq!(owner, [None; 3], "every wall given back");
+        // Two pairs tried, then the budget is spent: the two stand.
+        search.run(lines(), &candidates, &pairs, &p0, 0.99, &mut owner, 2);
+        assert_eq!(best(&search), [0, 1]);
+        assert_eq!(owner, [None; 3], "every wall given back");
+    }
 }

@@ -144,10 +144,9 @@ impl fmt::Display for RejectReason {
         match self {
             RejectReason::OutsideGate => f.write_str("outside gate"),
             RejectReason::NoOverlap { map } => write!(f, "no overlap (closest map line {map})"),
-            RejectReason::MapLineTaken { map, by } => write!(
-                f,
-                "map line {map} already taken by a better match (observed line {by})"
-            ),
+            RejectReason::MapLineTaken { map, by } => {
+                write!(f, "map line {map} went to observed line {by}")
+            }
             RejectReason::Incompatible { map } => write!(
                 f,
                 "not jointly compatible with the scan's other matches (closest map line {map})"
@@ -288,6 +287,7 @@ impl MatchResult {
                 p,
                 probability,
                 &mut self.owner,
+                joint::NODE_BUDGET,
             );
             self.chosen.extend(self.joint.best());
         }
@@ -295,9 +295,7 @@ impl MatchResult {
             let c = self.candidates[c];
             self.status[c.observed] = Status::Matched;
             self.owner[c.map] = Some(c.observed);
-            if let Some(pair) = self.pairs.get(c.pair) {
-                self.matches.push(*pair);
-            }
+            self.matches.push(self.pairs[c.pair]);
         }
         self.matches.sort_unstable_by(|a, b| {
             a.innovation

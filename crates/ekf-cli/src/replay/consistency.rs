@@ -1,0 +1,139 @@
+//! A consistency monitor on the laser innovations: does the filter's covariance explain
+//! the lines it fuses?
+//!
+//! The lines a scan fuses, one after the other, have NIS values whose sum is the scan's
+//! joint NIS, chi-square with two degrees of freedom per line when the filter is
+//! consistent. Over the last [`WINDOW_SCANS`] scans that fused lines the sums add up, and
+//! so do the degrees of freedom. The filter counts as **over-confident** while the
+//! window's NIS is above the [`BAND_PROBABILITY`] quantile of its chi-square
+//! distribution: the innovations are larger than its covariance says they can be (motion
+//! noisier than its model, a map that is off, a wrong association). Each line passed a
+//! 2-dof gate before it was fused, which cuts off large values, so a window above the
+//! band is far outside it.
+//!
+//! The monitor reports (the replay summary, and one `/ekf/diagnostics` message at the
+//! start of each over-confident stretch); it does not change the filter.
+
+use ekf_core::chi_square_quantile;
+use serde::Serialize;
+use std::collections::VecDeque;
+
+/// Scans with fused lines in the window.
+pub const WINDOW_SCANS: usize = 20;
+
+/// The window's NIS is over-confident above this quantile of its chi-square distribution.
+pub const BAND_PROBABILITY: f64 = 0.999;
+
+/// What the monitor saw over a replay.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct ConsistencyCounts {
+    /// Scans that fused lines.
+    pub scans: u64,
+    /// Of those, scans that ended a full window above the band.
+    pub over_confident_scans: u64,
+    /// Stretches of over-confident scans.
+    pub over_confident_stretches: u64,
+    /// The NIS of every fused line summed, over its degrees of freedom (1 when
+    /// consistent, less because of the gates); `None` before a line is fused.
+    pub nis_per_dof: Option<f64>,
+}
+
+/// The monitor's window.
+#[derive(Debug, Clone, Default)]
+pub struct ConsistencyMonitor {
+    window: VecDeque<(f64, u32)>,
+    window_nis: f64,
+    window_dof: u32,
+    total_nis: f64,
+    total_dof: u64,
+    over: bool,
+    /// `χ²⁻¹(BAND_PROBABILITY)` for 2, 4, 6, … degrees of freedom, grown as needed.
+    thresholds: Vec<f64>,
+}
+
+impl ConsistencyMonitor {
+    /// Takes the NIS of the lines one scan fused; returns `true` if the filter has just
+    /// become over-confident (the first scan of a stretch).
+    pub fn scan(
+        &mut self,
+        fused_nis: impl IntoIterator<Item = f64>,
+        counts: &mut ConsistencyCounts,
+    ) -> bool {
+        let (mut nis, mut dof) = (0.0, 0u32);
+        for v in fused_nis {
+            nis += v;
+            dof += 2;
+        }
+        if dof == 0 {
+            return false;
+        }
+        counts.scans += 1;
+        self.total_nis += nis;
+        self.total_dof += u64::from(dof);
+        counts.nis_per_dof = Some(self.total_nis / self.total_dof as f64);
+        self.window.push_back((nis, dof));
+        self.window_nis += nis;
+        self.window_dof += dof;
+        if self.window.len() > WINDOW_SCANS {
+            if let Some((n, d)) = self.window.pop_front() {
+                self.window_nis -= n;
+                self.window_dof -= d;
+            }
+        }
+        let full = self.window.len() == WINDOW_SCANS;
+        let over = full && self.window_nis > self.threshold(self.window_dof);
+        let started = over && !self.over;
+        self.over = over;
+        counts.over_confident_scans += u64::from(over);
+        counts.over_confident_stretches += u64::from(started);
+        started
+    }
+
+    /// The band's upper end for `dof` (even) degrees of freedom.
+    fn threshold(&mut self, dof: u32) -> f64 {
+        let k = (dof / 2) as usize;
+        while self.thresholds.len() < k {
+            let d = 2 * (self.thresholds.len() as u32 + 1);
+            // Beyond the quantile's range (10,000 dof) the band is open: not flagged.
+            let t = chi_square_quantile(BAND_PROBABILITY, d).unwrap_or(f64::INFINITY);
+            self.thresholds.push(t);
+        }
+        self.thresholds[k - 1]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_window_of_consistent_scans_is_not_flagged_and_one_of_large_innovations_is() {
+        let mut m = ConsistencyMonitor::default();
+        let mut c = ConsistencyCounts::default();
+        // Three lines a scan with NIS 2 each: exactly the mean of chi-square(2).
+        for _ in 0..50 {
+            assert!(!m.scan([2.0, 2.0, 2.0], &mut c));
+        }
+        assert_eq!((c.scans, c.over_confident_scans), (50, 0));
+        assert_eq!(c.nis_per_dof, Some(1.0));
+        // Scans without fused lines change nothing.
+        assert!(!m.scan([], &mut c));
+        assert_eq!(c.scans, 50);
+        // Lines that pass their 2-dof gate (9.21) but sit near it, scan after scan:
+        // 120 dof with a sum of 20·24 = 480, far above chi-square(120)'s 0.999 quantile
+        // (173.6). The window fills with them after a few scans.
+        let flagged: Vec<bool> = (0..20).map(|_| m.scan([8.0, 8.0, 8.0], &mut c)).collect();
+        let first = flagged.iter().position(|&f| f).expect("flagged");
+        assert_eq!(flagged.iter().filter(|&&f| f).count(), 1, "one stretch");
+        assert!(first < 10, "flagged after {first} scans");
+        assert_eq!(c.over_confident_stretches, 1);
+        assert_eq!(c.over_confident_scans, 20 - first as u64);
+        // Back to consistent lines: the stretch ends once they dominate the window.
+        for _ in 0..40 {
+            m.scan([2.0, 2.0, 2.0], &mut c);
+        }
+        assert!(!m.over);
+        assert!(m.scan([8.0; 40], &mut c), "a new stretch is counted again");
+        assert_eq!(c.over_confident_stretches, 2);
+    }
+}
