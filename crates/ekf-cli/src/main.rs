@@ -871,17 +871,7 @@ fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
             let config = load_config(config.as_deref())?;
             commands::create_output_dir(&work_dir)
                 .map_err(|e| format!("{}: {e}", work_dir.display()))?;
-            let mut logs = Vec::new();
-            for path in &paths {
-                if path.is_dir() {
-                    logs.extend(
-                        corpus::corpus_logs(path)
-                            .map_err(|e| format!("{}: {e}", path.display()))?,
-                    );
-                } else {
-                    logs.push(path.clone());
-                }
-            }
+            let logs = corpus::logs_of(&paths)?;
             let mut rows = Vec::new();
             for log in &logs {
                 let row = corpus::run_log(log, &config, &work_dir, global);

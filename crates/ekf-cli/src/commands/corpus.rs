@@ -53,6 +53,22 @@ pub struct CorpusRow {
     pub error: Option<String>,
 }
 
+/// The logs `paths` name: a file as it is, a folder as its CARMEN logs
+/// ([`corpus_logs`]). An error names the folder that could not be read.
+pub fn logs_of(paths: &[PathBuf]) -> std::io::Result<Vec<PathBuf>> {
+    let mut logs = Vec::new();
+    for path in paths {
+        if path.is_dir() {
+            let found = corpus_logs(path)
+                .map_err(|e| std::io::Error::new(e.kind(), format!("{}: {e}", path.display())))?;
+            logs.extend(found);
+        } else {
+            logs.push(path.clone());
+        }
+    }
+    Ok(logs)
+}
+
 /// The CARMEN logs in `dir` (`*.log`, `*.log.gz`), sorted by name.
 pub fn corpus_logs(dir: &Path) -> std::io::Result<Vec<PathBuf>> {
     let mut logs: Vec<PathBuf> = std::fs::read_dir(dir)?
@@ -186,4 +202,33 @@ pub fn table(rows: &[CorpusRow], global: bool) -> String {
         t.push('\n');
     }
     t
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_folder_stands_for_its_carmen_logs_in_name_order_and_a_file_for_itself() {
+        let dir = tempfile::tempdir().unwrap();
+        for name in ["b-corrected.log.gz", "a.log", "notes.txt"] {
+            std::fs::write(dir.path().join(name), "").unwrap();
+        }
+        let single = PathBuf::from("elsewhere/x.log.gz");
+        let logs = logs_of(&[dir.path().to_path_buf(), single.clone()]).unwrap();
+        assert_eq!(
+            logs,
+            [
+                dir.path().join("a.log"),
+                dir.path().join("b-corrected.log.gz"),
+                single
+            ]
+        );
+        assert_eq!(log_name(&logs[1]), "b");
+        let missing = dir.path().join("gone");
+        std::fs::create_dir(&missing).unwrap();
+        std::fs::remove_dir(&missing).unwrap();
+        // A path that is not a folder is taken as a log (its import will name it).
+        assert_eq!(logs_of(std::slice::from_ref(&missing)).unwrap(), [missing]);
+    }
 }

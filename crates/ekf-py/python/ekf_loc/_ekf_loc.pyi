@@ -7,7 +7,7 @@ of real numbers (converted to float64); results are float64 numpy arrays unless 
 """
 
 import os
-from typing import Any, Mapping, Optional, Sequence, Tuple, Union, final
+from typing import Any, Literal, Mapping, Optional, Sequence, Tuple, Union, final
 
 import numpy as np
 import numpy.typing as npt
@@ -42,6 +42,8 @@ _U64Array: TypeAlias = npt.NDArray[np.uint64]
 _Pose: TypeAlias = Union[Tuple[float, float, float], Sequence[float], npt.NDArray[np.floating]]
 _PathLike: TypeAlias = Union[str, "os.PathLike[str]"]
 _ConfigDict: TypeAlias = Mapping[str, Any]
+_ReplayMode: TypeAlias = Literal["odometry", "compass", "laser", "laser+compass"]
+_SteerBy: TypeAlias = Literal["truth", "ekf", "odometry"]
 
 @final
 class UpdateOutcome:
@@ -392,7 +394,7 @@ class ReplayResult:
 def replay(
     path: _PathLike,
     config: Union[None, _PathLike, _ConfigDict] = None,
-    mode: str = "laser+compass",
+    mode: _ReplayMode = "laser+compass",
     map: Optional[_PathLike] = None,
     init_from_truth: bool = False,
     global_localization: bool = False,
@@ -447,7 +449,7 @@ def simulate(
     out: Optional[_PathLike] = None,
     seed: int = 1,
     duration: Optional[float] = None,
-    steer_by: str = "truth",
+    steer_by: _SteerBy = "truth",
     resolution: Optional[float] = None,
     slips_per_minute: Optional[float] = None,
     compass_bias_deg: Optional[float] = None,
