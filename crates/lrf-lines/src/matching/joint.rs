@@ -57,7 +57,8 @@ pub(super) struct JointSearch {
     nodes: Vec<Node>,
     /// Per depth, the candidate chosen for the node below it (`None`: no wall).
     chosen: Vec<Option<usize>>,
-    /// The best complete hypothesis: per depth, the candidate or `None`.
+    /// The best hypothesis found: per depth, the candidate or `None` (complete unless
+    /// the budget ran out first).
     best: Vec<Option<usize>>,
     /// `χ²_{2k}⁻¹(p)` for `k` = 1, 2, … pairs, grown as needed.
     thresholds: Vec<f64>,
