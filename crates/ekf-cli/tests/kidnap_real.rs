@@ -45,10 +45,8 @@ fn run(lines: &[Vec<String>], dir: &Path) -> ReplayOutcome {
         mode: Mode::Laser,
         map: Some(map),
         init_from_truth: true,
-        out_mcap: None,
-        tum: None,
         keep_trajectories: true,
-        global: false,
+        ..ReplayOptions::default()
     };
     let outcome = replay(&bag, &Config::default(), &options, &mut |_, _| {}).unwrap();
     assert!(outcome.failure.is_none());

@@ -57,10 +57,8 @@ fn run(dir: &Path) -> (ReplayOutcome, u64) {
         mode: Mode::Laser,
         map: Some(map),
         init_from_truth: true,
-        out_mcap: None,
-        tum: None,
         keep_trajectories: true,
-        global: false,
+        ..ReplayOptions::default()
     };
     let config = Config::preset("paper-robot").unwrap();
     let outcome = replay(&bag, &config, &options, &mut |_, _| {}).unwrap();

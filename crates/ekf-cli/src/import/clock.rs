@@ -352,18 +352,13 @@ mod tests {
         }
     }
 
-    /// Times and repairs of `stamps` (lines 1, 2, …), the clock judged on the first
+    /// Times and repairs of `entries` placed in order, the clock judged on the first
     /// `judged` of them.
-    fn run_judged(
-        stamps: &[RawStamp],
+    fn place_all(
+        entries: Vec<Entry>,
         judged: usize,
         strict: bool,
     ) -> Result<(Vec<u64>, TimeRepairs), ImportError> {
-        let entries: Vec<Entry> = stamps
-            .iter()
-            .enumerate()
-            .map(|(i, &s)| entry(i as u64 + 1, s))
-            .collect();
         let mut clock = ClockRepair::new(strict);
         let mut out = Output::default();
         clock.judge(&entries[..judged], &mut out)?;
@@ -375,6 +370,21 @@ mod tests {
             out.queue.iter().map(ImportRecord::t_ns).collect(),
             out.stats.time_repairs,
         ))
+    }
+
+    /// Times and repairs of odometry records with `stamps` (lines 1, 2, …), the clock
+    /// judged on the first `judged` of them.
+    fn run_judged(
+        stamps: &[RawStamp],
+        judged: usize,
+        strict: bool,
+    ) -> Result<(Vec<u64>, TimeRepairs), ImportError> {
+        let entries: Vec<Entry> = stamps
+            .iter()
+            .enumerate()
+            .map(|(i, &s)| entry(i as u64 + 1, s))
+            .collect();
+        place_all(entries, judged, strict)
     }
 
     fn run(stamps: &[RawStamp], strict: bool) -> Result<(Vec<u64>, TimeRepairs), ImportError> {
@@ -489,14 +499,9 @@ mod tests {
             entry(6, t),
             scan(7, Valid(8 * S)),
         ];
-        let mut clock = ClockRepair::new(false);
-        let mut out = Output::default();
-        clock.judge(&entries, &mut out).unwrap();
-        for e in entries {
-            clock.place(e, &mut out).unwrap();
-        }
-        let times: Vec<u64> = out.queue.iter().map(ImportRecord::t_ns).collect();
-        assert!(out.stats.time_repairs.clock_broken);
+        let judged = entries.len();
+        let (times, repairs) = place_all(entries, judged, false).unwrap();
+        assert!(repairs.clock_broken);
         assert_eq!(times, [1, 1, 2, 2, 3, 4, 4].map(|k| k * SYNTHETIC_STEP_NS));
     }
 

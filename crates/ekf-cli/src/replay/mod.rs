@@ -37,8 +37,9 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 pub use summary::ReplaySummary;
 
-/// The paper's four estimator configurations (Fig. 9/10).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// The paper's four estimator configurations (Fig. 9/10); the default is all sensors,
+/// laser + compass (as `ekf replay`'s).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Mode {
     /// Prediction only: dead reckoning.
     Odometry,
@@ -47,6 +48,7 @@ pub enum Mode {
     /// Prediction + laser lines.
     Laser,
     /// Prediction + laser lines + compass.
+    #[default]
     LaserCompass,
 }
 
@@ -80,8 +82,9 @@ impl Mode {
     }
 }
 
-/// What to replay and where to write.
-#[derive(Debug, Clone)]
+/// What to replay and where to write. The default is `ekf replay LOG` with no flags:
+/// laser + compass, a first-scan map, the configured initial pose, no files written.
+#[derive(Debug, Clone, Default)]
 pub struct ReplayOptions {
     /// Estimator configuration.
     pub mode: Mode,
@@ -863,12 +866,20 @@ impl<'a> Run<'a> {
     /// state already refers to ([`MotionClock::advance`]). Returns whether anything was
     /// predicted.
     fn apply_motion(&mut self, step: MotionStep, t0: u64, t1: u64) -> Result<bool, ReplayError> {
-        match self.clock.advance(step, t0, t1) {
-            None => return Ok(false),
-            Some(MotionStep::Wheels(s)) => self.localizer.predict_wheels(&s)?,
-            Some(MotionStep::Odometry(m)) => self.localizer.predict_odometry(&m)?,
-        }
+        let Some(part) = self.clock.advance(step, t0, t1) else {
+            return Ok(false);
+        };
+        self.predict(part)?;
         Ok(true)
+    }
+
+    /// Predicts the filter through one motion step.
+    fn predict(&mut self, step: MotionStep) -> Result<(), ReplayError> {
+        match step {
+            MotionStep::Wheels(s) => self.localizer.predict_wheels(&s)?,
+            MotionStep::Odometry(m) => self.localizer.predict_odometry(&m)?,
+        }
+        Ok(())
     }
 
     /// The state predicted through wheel readings that have not been fused yet
@@ -916,11 +927,9 @@ impl<'a> Run<'a> {
     /// ([`MotionClock::extrapolate`]).
     fn catch_up(&mut self, t_ns: u64) -> Result<(), ReplayError> {
         match self.clock.extrapolate(t_ns) {
-            None => {}
-            Some(MotionStep::Wheels(s)) => self.localizer.predict_wheels(&s)?,
-            Some(MotionStep::Odometry(m)) => self.localizer.predict_odometry(&m)?,
+            Some(step) => self.predict(step),
+            None => Ok(()),
         }
-        Ok(())
     }
 
     fn compass(&mut self, message: &BagMessage) -> Result<(), ReplayError> {

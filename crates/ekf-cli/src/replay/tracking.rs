@@ -18,7 +18,7 @@
 //! ([`RelocalizeParams::angle_tolerance`], 3°), a scan's lines locate the robot better
 //! than the filter does: the same search runs, and a clear, verified answer elsewhere
 //! restarts the filter there (a relocalization without a loss). Odometry that turns
-//! worse than its noise model says (csail's is off by 7.5° a scan step) is caught so
+//! worse than its noise model says (csail's is off by up to 17° on a 60° turn) is caught so
 //! before nearest-neighbour matching locks onto the wrong walls. A check whose search is
 //! refused (ambiguous, or not verified) leaves the filter treated as lost, without a loss
 //! counted, until a scan fuses at least [`MIN_VERIFIED_LINES`] lines again: meanwhile
