@@ -15,19 +15,32 @@ import sys
 # log: (max RMSE m, max share of scans over 1 m)
 TRACKED = {
     "aces": (0.078, 0.01),
-    "fhw": (0.079, 0.01),
     "freiburg-101": (0.062, 0.01),
+    "infinite-corridor": (0.094, 0.01),
     "seattle": (0.15, 0.01),
-    # Not yet at the target (docs/RESULTS.md): regression bounds.
-    "edmonton": (0.14, 0.01),
-    "freiburg-campus": (0.20, 0.01),
-    "infinite-corridor": (0.23, 0.012),
-    "csail": (0.42, 0.06),
-    "orebro": (3.0, 0.38),
+    # Not yet at the RMSE target (docs/RESULTS.md): regression bounds.
+    "fhw": (0.09, 0.01),
+    "edmonton": (0.11, 0.01),
+    "freiburg-campus": (0.19, 0.01),
+    "csail": (0.31, 0.01),
+    "orebro": (5.0, 0.42),
 }
+
+# Laser alone, orebro is lost on most scans: it must say so. Largest share of the scans
+# it calls tracked that are over 1 m off.
+OVER_1M_TRACKED = {"orebro": 0.06}
 
 # With --global (started 1 km off): lock-on within this many scans.
 LOCK_WITHIN = {"aces": 20, "edmonton": 20, "fhw": 20, "freiburg-101": 20}
+
+# With --global, scans over 1 m off while the filter says it is tracking, beyond those of
+# the run from the reference's first pose: a wrong lock that holds. At most this many.
+WRONG_LOCK_SCANS = 5
+
+
+def wrong_scans(row) -> float:
+    """Scans over 1 m off while the filter said it was tracking."""
+    return row["over_1m_tracked"] * (1.0 - row["lost"]) * row["scans"]
 
 
 def main() -> int:
@@ -45,6 +58,19 @@ def main() -> int:
             failures.append(f"{log}: {100 * r['over_1m']:.1f} % over 1 m > {100 * over:.1f} %")
         if r["replay_s"] > 30:
             failures.append(f"{log}: replay took {r['replay_s']:.1f} s")
+    for log, most in OVER_1M_TRACKED.items():
+        r = tracked.get(log)
+        if r and not r["error"] and r["over_1m_tracked"] > most:
+            failures.append(
+                f"{log}: {100 * r['over_1m_tracked']:.1f} % of the scans called tracked "
+                f"over 1 m > {100 * most:.1f} %")
+    for log, r in global_.items():
+        t = tracked.get(log)
+        if r["error"] or t is None or t["error"]:
+            continue
+        extra = wrong_scans(r) - wrong_scans(t)
+        if extra > WRONG_LOCK_SCANS + 0.5:
+            failures.append(f"{log} --global: {extra:.0f} more scans over 1 m while tracking")
     for log, within in LOCK_WITHIN.items():
         r = global_.get(log)
         lock = r and r["locked_on_scan"]
@@ -52,7 +78,8 @@ def main() -> int:
             failures.append(f"{log} --global: locked on at scan {lock}, not within {within}")
     for f in failures:
         print("FAIL", f)
-    print(f"corpus: {len(TRACKED) + len(LOCK_WITHIN) - len(failures)} passed, {len(failures)} failed")
+    checks = len(TRACKED) + len(OVER_1M_TRACKED) + len(global_) + len(LOCK_WITHIN)
+    print(f"corpus: {checks - len(failures)} passed, {len(failures)} failed")
     return 1 if failures else 0
 
 

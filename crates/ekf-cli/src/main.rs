@@ -426,6 +426,22 @@ fn print_replay_table(s: &replay::ReplaySummary) {
             s.warning_count, s.warnings[0].topic, s.warnings[0].log_time_ns, s.warnings[0].reason
         );
     }
+    let k = &s.tracking;
+    if k.losses + k.searches > 0 || k.locked_on_scan.is_some() {
+        let lock = k
+            .locked_on_scan
+            .map_or(String::new(), |n| format!("; locked on at scan {n}"));
+        println!(
+            "  tracking: lost {} times ({} motion gaps), {} scans lost, {} relocalizations ({} searches, {} refused){lock}{}",
+            k.losses,
+            k.motion_gaps,
+            k.scans_lost,
+            k.relocalizations,
+            k.searches,
+            k.refused,
+            if k.lost_at_end > 0 { "; lost at the end" } else { "" }
+        );
+    }
     let c = &s.consistency;
     if let Some(nis) = c.nis_per_dof {
         println!(

@@ -29,6 +29,8 @@ pub use matching::{
 };
 pub use observed::ObservedLine;
 pub use point3d::pitched_scan_point;
-pub use relocalize::{relocalize, Hypothesis, Relocalization, RelocalizeParams, SearchWindow};
+pub use relocalize::{
+    fit_poses, relocalize, Hypothesis, PoseFits, Relocalization, RelocalizeParams, SearchWindow,
+};
 pub use scan::LaserScan;
 pub use scan::ScanError;

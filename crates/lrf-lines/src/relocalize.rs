@@ -47,6 +47,8 @@ pub struct RelocalizeParams {
     pub distinct_angle: f64,
     /// The best score must be at least this multiple of the best elsewhere.
     pub min_margin: f64,
+    /// Most candidate poses a search keeps ([`Relocalization::candidates`]).
+    pub max_candidates: usize,
 }
 
 impl RelocalizeParams {
@@ -71,6 +73,7 @@ impl Default for RelocalizeParams {
             distinct_distance: 0.5,
             distinct_angle: 10f64.to_radians(),
             min_margin: 1.2,
+            max_candidates: 8,
         }
     }
 }
@@ -107,12 +110,16 @@ pub struct Hypothesis {
 }
 
 /// The outcome of a search.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct Relocalization {
     /// The best pose.
     pub best: Hypothesis,
     /// The best score of a pose elsewhere (0 if there is none).
     pub runner_up: f64,
+    /// The best poses, each elsewhere than every better one, best first (`best` is the
+    /// first), at most [`RelocalizeParams::max_candidates`]: what a verification over
+    /// the next scans chooses among ([`fit_poses`]).
+    pub candidates: Vec<Hypothesis>,
     /// Total length of the observed lines used (m).
     pub observed_length: f64,
     /// Poses scored.
@@ -176,24 +183,7 @@ pub fn relocalize(
     window: &SearchWindow,
     params: &RelocalizeParams,
 ) -> Option<Relocalization> {
-    let mut observed: Vec<RobotLine> = lines
-        .iter()
-        .filter(|l| l.length() >= params.min_line_length)
-        .map(|l| {
-            let (a, b) = (
-                mount.transform_point(&l.start),
-                mount.transform_point(&l.end),
-            );
-            RobotLine {
-                a,
-                b,
-                angle: direction_angle(&a, &b),
-                length: l.length(),
-            }
-        })
-        .collect();
-    observed.sort_by(|x, y| y.length.total_cmp(&x.length));
-    observed.truncate(params.max_lines);
+    let observed = robot_lines(lines, mount, params);
     let observed_length: f64 = observed.iter().map(|l| l.length).sum();
     // A wall can hold a seen line only if it comes within the line's range of the window.
     let reach = window.radius
@@ -204,9 +194,8 @@ pub fn relocalize(
     let index = WallIndex::new(map, params.inlier_distance, |w| {
         distance_to_segment(&window.center, w) <= reach
     });
-    // Over the whole map, pairs with the longest line alone: the search stays within
-    // its budget on maps of thousands of walls.
-    let anchors = if window.radius.is_finite() { 2 } else { 1 };
+    // Pairs with the two longest lines: one of them may be clutter the map lacks.
+    let anchors = 2;
 
     let mut hypotheses: Vec<Hypothesis> = Vec::new();
     let mut seen: BTreeSet<(i64, i64, i64)> = BTreeSet::new();
@@ -256,20 +245,89 @@ pub fn relocalize(
             }
         }
     }
-    let best = *hypotheses
-        .iter()
-        .max_by(|x, y| x.score.total_cmp(&y.score))?;
-    let runner_up = hypotheses
-        .iter()
-        .filter(|h| params.elsewhere(&h.pose, &best.pose))
-        .map(|h| h.score)
-        .fold(0.0, f64::max);
+    hypotheses.sort_by(|x, y| y.score.total_cmp(&x.score));
+    let mut candidates: Vec<Hypothesis> = Vec::new();
+    for h in &hypotheses {
+        if candidates.len() >= params.max_candidates.max(2) {
+            break;
+        }
+        if candidates
+            .iter()
+            .all(|c| params.elsewhere(&h.pose, &c.pose))
+        {
+            candidates.push(*h);
+        }
+    }
+    let best = *candidates.first()?;
+    let runner_up = candidates.get(1).map_or(0.0, |h| h.score);
+    candidates.truncate(params.max_candidates.max(1));
     Some(Relocalization {
         best,
         runner_up,
+        candidates,
         observed_length,
         hypotheses: scored,
     })
+}
+
+/// The scan's lines usable by the search, in the robot frame (laser at `mount`): those
+/// at least [`RelocalizeParams::min_line_length`] long, the longest
+/// [`RelocalizeParams::max_lines`] of them, longest first.
+fn robot_lines(
+    lines: &[ObservedLine],
+    mount: &Pose2<f64>,
+    params: &RelocalizeParams,
+) -> Vec<RobotLine> {
+    let mut observed: Vec<RobotLine> = lines
+        .iter()
+        .filter(|l| l.length() >= params.min_line_length)
+        .map(|l| {
+            let (a, b) = (
+                mount.transform_point(&l.start),
+                mount.transform_point(&l.end),
+            );
+            RobotLine {
+                a,
+                b,
+                angle: direction_angle(&a, &b),
+                length: l.length(),
+            }
+        })
+        .collect();
+    observed.sort_by(|x, y| y.length.total_cmp(&x.length));
+    observed.truncate(params.max_lines);
+    observed
+}
+
+/// How well one scan fits given poses: each pose scored as a search scores its
+/// hypotheses, with the length of the observed lines used.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PoseFits {
+    /// One per pose, in order.
+    pub fits: Vec<Hypothesis>,
+    /// Total length of the observed lines used (m).
+    pub observed_length: f64,
+}
+
+/// Scores the scan's `lines` (laser at `mount`) at each of `poses` against `map`, as
+/// [`relocalize`] scores its hypotheses: the verification of a search's candidates over
+/// the scans after it, each candidate carried there by the odometry.
+pub fn fit_poses(
+    lines: &[ObservedLine],
+    map: &LineMap,
+    mount: &Pose2<f64>,
+    poses: &[Pose2<f64>],
+    params: &RelocalizeParams,
+) -> PoseFits {
+    let observed = robot_lines(lines, mount, params);
+    let index = WallIndex::new(map, params.inlier_distance, |_| false);
+    PoseFits {
+        fits: poses
+            .iter()
+            .map(|p| score(p, &observed, map, &index, params))
+            .collect(),
+        observed_length: observed.iter().map(|l| l.length).sum(),
+    }
 }
 
 /// Side of a [`WallIndex`] grid cell (m).

@@ -37,6 +37,7 @@ fn reported_covariance_matches_monte_carlo_spread() {
         bearing_sigma: SIGMA_BEARING,
         split_distance: 0.15,
         max_point_gap: 0.5,
+        min_incidence: 10.0_f64.to_radians(),
         min_points: 8,
         min_length: 0.5,
         merge_probability: 0.99,

@@ -55,6 +55,7 @@ prop_compose! {
         bearing_sigma in 0.0..0.01,
         split_distance in 0.01..0.3,
         max_point_gap in 0.05..1.0,
+        min_incidence in 0.01..1.5,
         min_points in 2usize..12,
         min_length in 0.0..1.0,
     ) -> ExtractionParams {
@@ -63,6 +64,7 @@ prop_compose! {
             bearing_sigma,
             split_distance,
             max_point_gap,
+            min_incidence,
             min_points,
             min_length,
             merge_probability: 0.99,

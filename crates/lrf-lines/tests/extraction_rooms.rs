@@ -25,6 +25,7 @@ fn params() -> ExtractionParams {
         // 5σ: noise alone rarely splits a wall; a split it does cause is merged back.
         split_distance: 5.0 * SIGMA_RANGE,
         max_point_gap: 0.5,
+        min_incidence: 10.0_f64.to_radians(),
         min_points: 8,
         min_length: 0.5,
         merge_probability: 0.99,
@@ -36,7 +37,15 @@ fn params() -> ExtractionParams {
 /// laid out to have none (checked here).
 fn expected(room: &Room, scanner: &Scanner) -> Vec<Piece> {
     let p = params();
-    let pieces = visible_pieces(&room.walls, &room.pose, scanner, p.max_point_gap);
+    // Neighbours belong together up to the spacing of beams on a wall seen at the least
+    // incidence, plus 3σ: `ρ sin Δφ / sin(λ − Δφ) + 3σ_ρ`, at least `max_point_gap`.
+    let step = scanner.angle_increment.abs();
+    let per_metre = step.sin() / (p.min_incidence - step).sin();
+    let gap = |a: f64, b: f64| {
+        p.max_point_gap
+            .max(a.min(b) * per_metre + 3.0 * p.range_sigma)
+    };
+    let pieces = visible_pieces(&room.walls, &room.pose, scanner, &gap);
     for piece in &pieces {
         // Noise moves the end points by a few σ and rarely changes the point count by
         // more than one (a gap break).

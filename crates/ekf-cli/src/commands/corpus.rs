@@ -7,7 +7,7 @@ use super::import::{import_log, LogFormat};
 use super::map::{build_map, MapSource};
 use crate::config::Config;
 use crate::import::CarmenOptions;
-use crate::replay::{replay, Mode, ReplayOptions};
+use crate::replay::{replay, Mode, ReplayOptions, ReplayOutcome};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -43,6 +43,11 @@ pub struct CorpusRow {
     pub losses: u64,
     /// Relocalizations that moved the filter.
     pub relocalizations: u64,
+    /// Share of the reference poses (0–1) at which the filter said it was lost.
+    pub lost: f64,
+    /// Share of the other reference poses (the filter said it was tracking) with an
+    /// error over 1 m (0–1): how often it is wrong without saying so.
+    pub over_1m_tracked: f64,
     /// With `global`, the scan at which the search locked on (`None`: never).
     pub locked_on_scan: Option<u64>,
     /// Wall time of the replay alone (s).
@@ -132,7 +137,7 @@ fn fill_row(
         init_from_truth: !global,
         out_mcap: None,
         tum: Some(work_dir.join(format!("{name}.tum"))),
-        keep_trajectories: false,
+        keep_trajectories: true,
         global,
     };
     let mut config = config.clone();
@@ -145,6 +150,7 @@ fn fill_row(
     if let Some(failure) = outcome.failure {
         return Err(failure.to_string());
     }
+    (row.lost, row.over_1m_tracked) = lost_and_wrong(&outcome);
     let s = outcome.summary;
     let a = s
         .accuracy
@@ -162,25 +168,55 @@ fn fill_row(
     Ok(())
 }
 
+/// At the reference poses: the share at which the filter said it was lost, and the share
+/// of the others with a position error over 1 m. Each reference pose is compared with the
+/// latest estimate at or before it; references before the first estimate are skipped.
+pub fn lost_and_wrong(outcome: &ReplayOutcome) -> (f64, f64) {
+    let estimates = &outcome.trajectory.samples;
+    let lost = &outcome.lost_scans_ns;
+    let (mut lost_count, mut tracked, mut wrong) = (0usize, 0usize, 0usize);
+    for r in &outcome.reference.samples {
+        let Some(e) = estimates
+            .partition_point(|e| e.t_ns <= r.t_ns)
+            .checked_sub(1)
+            .and_then(|i| estimates.get(i))
+        else {
+            continue;
+        };
+        if lost.binary_search(&e.t_ns).is_ok() {
+            lost_count += 1;
+        } else {
+            tracked += 1;
+            let error = (e.pose.x - r.pose.x).hypot(e.pose.y - r.pose.y);
+            wrong += usize::from(error > 1.0);
+        }
+    }
+    let share = |n: usize, of: usize| if of == 0 { 0.0 } else { n as f64 / of as f64 };
+    (
+        share(lost_count, lost_count + tracked),
+        share(wrong, tracked),
+    )
+}
+
 /// The rows as a Markdown table (with the lock-on scan when `global`).
 pub fn table(rows: &[CorpusRow], global: bool) -> String {
     let mut t = format!(
         "| log | scans | RMSE (m) | median | p95 | max | > 0.5 m | > 1 m | losses | \
-         relocalizations | replay (s) |{}\n\
-         |---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|{}\n",
+         relocalizations | lost | > 1 m tracked | replay (s) |{}\n\
+         |---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|{}\n",
         if global { " locked on at scan |" } else { "" },
         if global { "---:|" } else { "" },
     );
     for r in rows {
         if let Some(e) = &r.error {
             t.push_str(&format!(
-                "| {} | – | failed: {e} | | | | | | | | |\n",
+                "| {} | – | failed: {e} | | | | | | | | | | |\n",
                 r.log
             ));
             continue;
         }
         t.push_str(&format!(
-            "| {} | {} | {:.3} | {:.3} | {:.3} | {:.2} | {:.1} % | {:.1} % | {} | {} | {:.2} |",
+            "| {} | {} | {:.3} | {:.3} | {:.3} | {:.2} | {:.1} % | {:.1} % | {} | {} | {:.1} % | {:.1} % | {:.2} |",
             r.log,
             r.scans,
             r.rmse_m,
@@ -191,6 +227,8 @@ pub fn table(rows: &[CorpusRow], global: bool) -> String {
             100.0 * r.over_1m,
             r.losses,
             r.relocalizations,
+            100.0 * r.lost,
+            100.0 * r.over_1m_tracked,
             r.replay_s
         ));
         if global {

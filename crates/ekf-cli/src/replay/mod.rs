@@ -17,6 +17,7 @@ pub mod outputs;
 mod sink;
 pub mod summary;
 pub mod tracking;
+pub mod verification;
 
 use crate::config::{Config, MotionSource};
 use crate::mcap_io::{BagMessage, BagReader, MessageError, ReadError, WriteError};
@@ -210,6 +211,8 @@ pub struct ReplayOutcome {
     pub covariances: Vec<Matrix3<f64>>,
     /// The log's reference poses (empty if none, or unless kept).
     pub reference: Trajectory,
+    /// Log times (ns) of the scans that ended with the filter lost (empty unless kept).
+    pub lost_scans_ns: Vec<u64>,
     /// Set when the log broke off (damage, a decode failure): everything before it was
     /// processed and the outputs are finished.
     pub failure: Option<ReplayError>,
@@ -618,6 +621,8 @@ pub(crate) struct Run<'a> {
     map_written: bool,
     gps_gate: ChiSquareGate<f64>,
     tracking: tracking::Tracking,
+    /// Stamps of the scans that ended with the filter lost, if trajectories are kept.
+    lost_scans: Option<Vec<u64>>,
     consistency: consistency::ConsistencyMonitor,
 }
 
@@ -706,6 +711,7 @@ impl<'a> Run<'a> {
             } else {
                 tracking::Tracking::new(options.map.is_some())
             },
+            lost_scans: options.keep_trajectories.then(Vec::new),
             consistency: consistency::ConsistencyMonitor::default(),
             gps_gate: ChiSquareGate::from_probability(config.gps.gate_probability, 2).map_err(
                 |error| LocalizerError::Config {
@@ -742,6 +748,7 @@ impl<'a> Run<'a> {
             localizer,
             mut summary,
             tracking,
+            lost_scans,
             ..
         } = self;
         summary.tracking.lost_at_end = tracking.lost_for;
@@ -774,6 +781,7 @@ impl<'a> Run<'a> {
             trajectory: kept.estimate,
             covariances: kept.covariances,
             reference: kept.reference,
+            lost_scans_ns: lost_scans.unwrap_or_default(),
             failure,
         })
     }
@@ -875,9 +883,13 @@ impl<'a> Run<'a> {
 
     /// Predicts the filter through one motion step.
     fn predict(&mut self, step: MotionStep) -> Result<(), ReplayError> {
+        let before = self.localizer.pose();
         match step {
             MotionStep::Wheels(s) => self.localizer.predict_wheels(&s)?,
             MotionStep::Odometry(m) => self.localizer.predict_odometry(&m)?,
+        }
+        if let Some(pending) = self.tracking.verification.as_mut() {
+            pending.moved(&before.inverse().compose(&self.localizer.pose()));
         }
         Ok(())
     }
@@ -1052,6 +1064,12 @@ impl<'a> Run<'a> {
             };
             let gap = self.tracking.gap_before_scan(now);
             let report = self.check_tracking(&scan, now, gap, report)?;
+            if self.tracking.lost_for > 0 {
+                self.summary.tracking.scans_lost += 1;
+                if let Some(lost) = self.lost_scans.as_mut() {
+                    lost.push(now);
+                }
+            }
             self.check_consistency(now)?;
             let l = &mut self.summary.lines;
             l.scans_used += 1;
@@ -1086,6 +1104,13 @@ impl<'a> Run<'a> {
                     &self.localizer.pose(),
                     self.localizer.covariance(),
                 )?;
+                let rejections: Vec<String> = self
+                    .localizer
+                    .last_matches()
+                    .rejections()
+                    .iter()
+                    .map(|r| format!("line {}: {}", r.observed, r.reason))
+                    .collect();
                 let values = vec![
                     ("lines_extracted", report.extracted.to_string()),
                     ("lines_matched", report.matched.to_string()),
@@ -1093,6 +1118,7 @@ impl<'a> Run<'a> {
                     ("lines_fused", report.fused.to_string()),
                     ("lines_refused", report.refused.to_string()),
                     ("nis", nis.join(" ")),
+                    ("rejections", rejections.join("; ")),
                 ];
                 let level =
                     u8::from(report.extracted > 0 && report.fused == 0 && !report.map_built);
@@ -1138,7 +1164,10 @@ impl<'a> Run<'a> {
 
     /// The loss monitor after a scan's update ([`tracking`]): on a motion gap, while lost,
     /// or while the heading is less certain than the search resolves, searches the map
-    /// and restarts the filter at a verified pose. Returns the report of the update that
+    /// and restarts the filter at a verified pose. A search made while lost, with
+    /// odometry since the scan before, only nominates candidates, which the next scans
+    /// judge ([`verification`]); after a motion gap, or for a check of a tracked
+    /// estimate, the search's own scan decides. Returns the report of the update that
     /// stands.
     fn check_tracking(
         &mut self,
@@ -1151,40 +1180,95 @@ impl<'a> Run<'a> {
             return Ok(report);
         }
         let lost_now = self.tracking.scan_fused(report.extracted, report.fused);
-        let counts = &mut self.summary.tracking;
         let params = RelocalizeParams::default();
         let uncertain = tracking::uncertain(self.localizer.covariance(), &params);
+        if gap {
+            self.tracking.verification = None;
+        }
         if self.tracking.lost_for == 0 {
             if gap || lost_now {
+                let counts = &mut self.summary.tracking;
                 counts.losses += 1;
                 counts.motion_gaps += u64::from(gap);
+                let why = if gap {
+                    "lost: the motion source was silent since the last scan (a motion gap)"
+                } else {
+                    "lost: scans in a row with lines and none fused"
+                };
+                self.tracking_status(now, 2, why)?;
             } else if !uncertain {
                 return Ok(report);
             }
         } else if !gap && !self.tracking.unlocked && report.fused >= tracking::MIN_VERIFIED_LINES {
             // Regained by tracking alone.
             self.tracking.lost_for = 0;
+            self.tracking.verification = None;
+            self.tracking_status(now, 0, "tracking again: the scan's lines fused")?;
             return Ok(report);
+        }
+        let verify = !gap && (lost_now || self.tracking.lost_for > 0);
+        if let Some(mut pending) = self.tracking.verification.take() {
+            pending.add_scan(&self.localizer.fit_poses(&pending.poses(), &params));
+            if !pending.done() {
+                self.tracking.verification = Some(pending);
+                self.tracking.lost_for += 1;
+                return Ok(report);
+            }
+            let Some(won) = pending.verdict(&params) else {
+                self.summary.tracking.refused += 1;
+                self.tracking.lost_for += 1;
+                return Ok(report);
+            };
+            return self.restart_at(scan, now, won, report);
         }
         let pose = self.localizer.pose();
         let cov = self.localizer.covariance();
-        let Some(window) = self
+        let window = self
             .tracking
-            .window(Point2::new(pose.x, pose.y), cov[(0, 0)] + cov[(1, 1)])
-        else {
-            self.tracking.lost_for += 1;
-            return Ok(report);
-        };
-        counts.searches += 1;
+            .window(Point2::new(pose.x, pose.y), cov[(0, 0)] + cov[(1, 1)]);
+        self.summary.tracking.searches += 1;
         let found = self.localizer.relocalize(&window, &params);
-        let found = found.filter(|r| r.is_unambiguous(&params));
-        let Some(found) = found else {
-            counts.refused += 1;
+        if verify {
+            let nominates = |f: &lrf_lines::Relocalization| {
+                f.best.inliers >= params.min_inliers && f.best.score >= 0.5 * f.observed_length
+            };
+            match found.filter(nominates) {
+                Some(found) => {
+                    self.tracking.verification = Some(verification::Verification::start(&found))
+                }
+                None => self.summary.tracking.refused += 1,
+            }
+            self.tracking.lost_for += 1;
+            return Ok(report);
+        }
+        let Some(found) = found.filter(|r| r.is_unambiguous(&params)) else {
+            self.summary.tracking.refused += 1;
             self.tracking.lost_for += 1;
             return Ok(report);
         };
-        let best = found.best.pose;
-        if !params.elsewhere(&best, &pose) {
+        let won = verification::Verified {
+            pose: found.best.pose,
+            inliers: found.best.inliers,
+            score: found.best.score,
+            runner_up: found.runner_up,
+        };
+        self.restart_at(scan, now, won, report)
+    }
+
+    /// Restarts the filter at the pose a search found (`won`) unless the estimate is
+    /// already there, and fuses the scan again: kept if at least
+    /// [`tracking::MIN_VERIFIED_LINES`] lines fuse, otherwise the filter is put back.
+    /// Returns the report of the update that stands.
+    fn restart_at(
+        &mut self,
+        scan: &crate::ros2::sensor_msgs::LaserScan,
+        now: u64,
+        won: verification::Verified,
+        report: lrf_lines::ScanReport,
+    ) -> Result<lrf_lines::ScanReport, ReplayError> {
+        let params = RelocalizeParams::default();
+        let best = won.pose;
+        if !params.elsewhere(&best, &self.localizer.pose()) {
             // The estimate is where the search puts it.
             self.tracking.locked(&mut self.summary.tracking);
             return Ok(report);
@@ -1215,9 +1299,9 @@ impl<'a> Run<'a> {
                             ("x", format!("{:.3}", best.x)),
                             ("y", format!("{:.3}", best.y)),
                             ("theta", format!("{:.4}", best.theta)),
-                            ("inliers", found.best.inliers.to_string()),
-                            ("score_m", format!("{:.2}", found.best.score)),
-                            ("runner_up_m", format!("{:.2}", found.runner_up)),
+                            ("inliers", won.inliers.to_string()),
+                            ("score_m", format!("{:.2}", won.score)),
+                            ("runner_up_m", format!("{:.2}", won.runner_up)),
                         ],
                     )?;
                 }
@@ -1230,6 +1314,18 @@ impl<'a> Run<'a> {
                 Ok(report)
             }
         }
+    }
+
+    /// An `ekf/tracking` diagnostics message: a loss (level 2) or its end (level 0).
+    fn tracking_status(&mut self, now: u64, level: u8, message: &str) -> Result<(), ReplayError> {
+        let Some(out) = self.out.as_mut() else {
+            return Ok(());
+        };
+        let values = vec![
+            ("scans_lost", self.summary.tracking.scans_lost.to_string()),
+            ("losses", self.summary.tracking.losses.to_string()),
+        ];
+        Ok(out.diagnostics(now, "ekf/tracking", level, message, values)?)
     }
 
     /// A pose for the TUM trajectory and the output bag.

@@ -1,6 +1,7 @@
 //! The [`LineExtractor`]: parameters plus the scratch buffers the pipeline reuses from
 //! scan to scan.
 
+use super::breakpoint::Breakpoint;
 use super::fit::{fit_trimmed, PointNoise};
 use super::merge::{merge_collinear, Candidate, MergeRule};
 use super::points::{collect, BeamTable, Points, Run, ScanPoints};
@@ -40,7 +41,6 @@ impl LineExtractor {
             params,
             merge_rule: MergeRule {
                 gate,
-                max_gap: params.max_point_gap,
                 noise: PointNoise {
                     range_var: params.range_sigma * params.range_sigma,
                     bearing_var: params.bearing_sigma * params.bearing_sigma,
@@ -62,14 +62,15 @@ impl LineExtractor {
     /// Clears `out` and fills it with the lines of `scan`, in scan order.
     ///
     /// Steps: valid readings → points, cut into runs at invalid beams and at gaps over
-    /// `max_point_gap`; each run split at the point farthest from its chord while that
+    /// `max(max_point_gap, ρ · sin Δφ / sin(min_incidence − Δφ) + 3 range_sigma)` (the
+    /// adaptive breakpoint rule, `ρ` the nearer range); each run split at the point farthest from its chord while that
     /// distance exceeds `split_distance` (the split point moved to where the points change
     /// sides once both pieces are straight); pieces with fewer than `min_points` points or
     /// a chord shorter than `min_length` dropped; a weighted fit per piece (Pfister et al.,
     /// covariance = inverse Fisher information), with end points beyond 3σ trimmed;
     /// neighbours merged and refitted when
-    /// `(Δr, Δψ)ᵀ(Σ_a + Σ_b)⁻¹(Δr, Δψ) ≤ χ²₂⁻¹(merge_probability)` and their gap is at
-    /// most `max_point_gap`; lines shorter than `min_length` dropped. End points are the
+    /// `(Δr, Δψ)ᵀ(Σ_a + Σ_b)⁻¹(Δr, Δψ) ≤ χ²₂⁻¹(merge_probability)` and their gap passes
+    /// the same breakpoint rule; lines shorter than `min_length` dropped. End points are the
     /// first and last points projected onto the line. A scan without valid readings gives no lines; only an invalid header is an
     /// error ([`ExtractionError::InvalidScan`]).
     pub fn extract(
@@ -80,7 +81,13 @@ impl LineExtractor {
         out.clear();
         scan.validate()?;
         self.beams.update(scan);
-        collect(scan, &self.beams, self.params.max_point_gap, &mut self.scan);
+        let breakpoint = Breakpoint::new(
+            self.params.max_point_gap,
+            self.params.min_incidence,
+            scan.angle_increment,
+            self.params.range_sigma,
+        );
+        collect(scan, &self.beams, &breakpoint, &mut self.scan);
         let points = self.scan.points(&self.beams);
         self.segments.clear();
         split_runs(
@@ -103,6 +110,7 @@ impl LineExtractor {
             &self.segments,
             &mut self.candidates,
             &self.merge_rule,
+            &breakpoint,
         );
         for c in &self.candidates {
             if let Some(line) = observed_line(&points, &self.segments, c) {

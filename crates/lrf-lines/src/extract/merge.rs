@@ -1,6 +1,7 @@
 //! Merging of adjacent collinear lines: a chi-square test on the difference of their
 //! `(r, ψ)`, a gap check, and a refit of the union of their points.
 
+use super::breakpoint::Breakpoint;
 use super::fit::{fit_line, LineFit, PointNoise};
 use super::points::{Points, Run};
 use alloc::vec::Vec;
@@ -23,15 +24,13 @@ pub(crate) struct Candidate {
 pub(crate) struct MergeRule {
     /// Chi-square threshold (2 dof) on the Mahalanobis distance of the `(r, ψ)` difference.
     pub gate: f64,
-    /// Largest distance between the last point of one line and the first of the next (m).
-    pub max_gap: f64,
     /// Point noise for the refit.
     pub noise: PointNoise,
 }
 
 /// Merges neighbours in `candidates` (in scan order, with supports that tile `pieces`
-/// without holes) while their `(r, ψ)` pass the chi-square gate and their gap is at most
-/// `max_gap`; the merged line is the weighted refit of both supports' points (never the
+/// without holes) while their `(r, ψ)` pass the chi-square gate and the gap between the
+/// last point of one and the first of the next is within `breakpoint`; the merged line is the weighted refit of both supports' points (never the
 /// dropped clutter between them). Works in place, left to right, so a wall cut into
 /// several pieces merges back into one.
 pub(crate) fn merge_collinear(
@@ -39,12 +38,13 @@ pub(crate) fn merge_collinear(
     pieces: &[Run],
     candidates: &mut Vec<Candidate>,
     rule: &MergeRule,
+    breakpoint: &Breakpoint,
 ) {
     let mut kept: usize = 0;
     for i in 0..candidates.len() {
         let next = candidates[i].clone();
         if let Some(previous) = kept.checked_sub(1).and_then(|k| candidates.get(k)) {
-            if let Some(merged) = try_merge(points, pieces, previous, &next, rule) {
+            if let Some(merged) = try_merge(points, pieces, previous, &next, rule, breakpoint) {
                 candidates[kept - 1] = merged;
                 continue;
             }
@@ -61,15 +61,21 @@ fn try_merge(
     a: &Candidate,
     b: &Candidate,
     rule: &MergeRule,
+    breakpoint: &Breakpoint,
 ) -> Option<Candidate> {
-    let last = points.xy(pieces
+    let last_beam = pieces
         .get(a.support.end.checked_sub(1)?)?
         .end
-        .checked_sub(1)?)?;
-    let first = points.xy(pieces.get(b.support.start)?.start)?;
+        .checked_sub(1)?;
+    let first_beam = pieces.get(b.support.start)?.start;
+    let (last, first) = (points.xy(last_beam)?, points.xy(first_beam)?);
     let (dx, dy) = (last.0 - first.0, last.1 - first.1);
+    let limit = breakpoint.max_gap(
+        *points.range.get(last_beam)?,
+        *points.range.get(first_beam)?,
+    );
     if a.support.end != b.support.start
-        || dx * dx + dy * dy > rule.max_gap * rule.max_gap
+        || dx * dx + dy * dy > limit * limit
         || mahalanobis_squared(&a.fit, &b.fit)? > rule.gate
     {
         return None;

@@ -20,11 +20,18 @@ pub struct ExtractionParams {
     /// when that distance exceeds this (m). Default 0.05 (5 σ_ρ, so noise alone rarely
     /// splits a wall, while a 5 cm step does).
     pub split_distance: f64,
-    /// Consecutive valid points farther apart than this never belong to one segment,
-    /// and two collinear lines separated by more are never merged (m). Default 0.3: a
-    /// wall at 8 m seen at 60° incidence with 0.5° steps has 0.14 m spacing; doorways
-    /// and occlusion shadows are wider.
+    /// Consecutive valid points at most this far apart always belong to one segment, and
+    /// two collinear lines separated by at most this may merge (m). Default 0.3: doorways
+    /// and occlusion shadows are wider. Farther from the sensor the limit grows with the
+    /// beam spacing (see `min_incidence`).
     pub max_point_gap: f64,
+    /// The most oblique incidence (angle between beam and surface) at which a surface is
+    /// still taken as one (rad): two neighbouring points at nearer range `ρ` also belong
+    /// together when they are at most `ρ · sin Δφ / sin(λ − Δφ) + 3σ_ρ` apart, the spacing
+    /// of beams `Δφ` apart on a wall at incidence `λ` (adaptive breakpoint detector,
+    /// Borges and Aldon 2004). Default 10°: a 1° scanner then keeps a wall at 10 m seen
+    /// at 60° (0.2 m spacing, limit 1.28 m) in one piece, which a fixed 0.3 m would cut.
+    pub min_incidence: f64,
     /// Fewest points a line may be fitted to. Default 6 (a weighted fit of two
     /// parameters needs a few more points than two to have a meaningful covariance).
     pub min_points: usize,
@@ -43,6 +50,7 @@ impl Default for ExtractionParams {
             bearing_sigma: 0.001,
             split_distance: 0.05,
             max_point_gap: 0.3,
+            min_incidence: 10.0_f64.to_radians(),
             min_points: 6,
             min_length: 0.4,
             merge_probability: 0.99,
@@ -52,7 +60,7 @@ impl Default for ExtractionParams {
 
 impl ExtractionParams {
     /// Returns the parameters unchanged if every field is in range: `range_sigma`,
-    /// `split_distance`, `max_point_gap` finite and > 0; `bearing_sigma`, `min_length`
+    /// `split_distance`, `max_point_gap` finite and > 0; `min_incidence` in (0, π/2); `bearing_sigma`, `min_length`
     /// finite and ≥ 0; `min_points ≥ 2`; `merge_probability` in (0, 1). Otherwise an
     /// [`ExtractionError::InvalidParameter`] naming the first bad field.
     pub fn validated(self) -> Result<Self, ExtractionError> {
@@ -70,6 +78,9 @@ impl ExtractionParams {
         }
         if !positive(self.max_point_gap) {
             return bad("max_point_gap", "a finite distance > 0 (m)");
+        }
+        if !(self.min_incidence > 0.0 && self.min_incidence < core::f64::consts::FRAC_PI_2) {
+            return bad("min_incidence", "an angle in (0, π/2) (rad)");
         }
         if self.min_points < 2 {
             return bad("min_points", "at least 2");
@@ -124,6 +135,13 @@ mod tests {
                     ..d
                 },
                 "max_point_gap",
+            ),
+            (
+                ExtractionParams {
+                    min_incidence: 0.0,
+                    ..d
+                },
+                "min_incidence",
             ),
             (ExtractionParams { min_points: 1, ..d }, "min_points"),
             (

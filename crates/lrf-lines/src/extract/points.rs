@@ -3,6 +3,7 @@
 //! of the valid points into runs at invalid beams and range gaps. The later steps address
 //! points by beam, so nothing is copied between them.
 
+use super::breakpoint::Breakpoint;
 use super::moments::{Moments, NormalLine};
 use crate::LaserScan;
 use alloc::vec::Vec;
@@ -35,8 +36,8 @@ impl BeamTable {
     }
 }
 
-/// A maximal stretch of consecutive valid beams whose neighbouring points are at most
-/// `max_gap` apart: beams `start..end`.
+/// A maximal stretch of consecutive valid beams whose neighbouring points are no farther
+/// apart than the [`Breakpoint`] rule allows: beams `start..end`.
 pub(crate) type Run = Range<usize>;
 
 /// The points of a scan, indexed by beam, as parallel slices (structure of arrays: each
@@ -113,9 +114,14 @@ impl ScanPoints {
 }
 
 /// Refills `out` with the readings of `scan` as points, and cuts the valid ones (in beam
-/// order) into runs at every invalid beam and wherever consecutive points are more than
-/// `max_gap` apart. `table` must be up to date for `scan`.
-pub(crate) fn collect(scan: &LaserScan<'_>, table: &BeamTable, max_gap: f64, out: &mut ScanPoints) {
+/// order) into runs at every invalid beam and wherever consecutive points are farther
+/// apart than `breakpoint` allows. `table` must be up to date for `scan`.
+pub(crate) fn collect(
+    scan: &LaserScan<'_>,
+    table: &BeamTable,
+    breakpoint: &Breakpoint,
+    out: &mut ScanPoints,
+) {
     let ScanPoints {
         x,
         y,
@@ -145,10 +151,11 @@ pub(crate) fn collect(scan: &LaserScan<'_>, table: &BeamTable, max_gap: f64, out
         *g = dx * dx + dy * dy;
     }
     runs.clear();
-    let max_gap_sq = max_gap * max_gap;
     let valid = ValidRanges::of(scan);
-    // The first beam of the current run, if the previous beam was valid.
+    // The first beam of the current run, if the previous beam was valid, and that
+    // beam's range.
     let mut run_start: Option<usize> = None;
+    let mut previous_range = 0.0;
     for (i, (&r, &gap)) in range.iter().zip(gap_sq.iter()).enumerate() {
         if !valid.contains(r) {
             if let Some(start) = run_start.take() {
@@ -156,15 +163,17 @@ pub(crate) fn collect(scan: &LaserScan<'_>, table: &BeamTable, max_gap: f64, out
             }
             continue;
         }
+        // Both points are valid, hence finite, and so is `gap`.
+        let limit = breakpoint.max_gap(previous_range, r);
         match run_start {
-            // Both points are valid, hence finite, and so is `gap`.
-            Some(start) if gap > max_gap_sq => {
+            Some(start) if gap > limit * limit => {
                 runs.push(start..i);
                 run_start = Some(i);
             }
             Some(_) => {}
             None => run_start = Some(i),
         }
+        previous_range = r;
     }
     if let Some(start) = run_start {
         runs.push(start..n);
@@ -302,7 +311,12 @@ mod tests {
         let mut table = BeamTable::default();
         table.update(&scan);
         let mut out = ScanPoints::default();
-        collect(&scan, &table, 0.3, &mut out);
+        collect(
+            &scan,
+            &table,
+            &Breakpoint::new(0.3, 0.17, 0.01, 0.01),
+            &mut out,
+        );
         assert_eq!(out.runs, [0..2, 3..5, 5..7]);
         assert_eq!(out.sums.len(), 9);
         let (x, y) = out.points(&table).xy(6).unwrap();

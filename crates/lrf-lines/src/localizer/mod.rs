@@ -13,7 +13,9 @@ pub use error::LocalizerError;
 use compass_lockout::{CompassLockout, Rejected};
 use map_errors::MapErrors;
 
-use crate::relocalize::{relocalize, Relocalization, RelocalizeParams, SearchWindow};
+use crate::relocalize::{
+    fit_poses, relocalize, PoseFits, Relocalization, RelocalizeParams, SearchWindow,
+};
 use crate::{LaserScan, LineExtractor, LineMap, MatchResult, Matcher, ObservedLine, WallErrors};
 use alloc::vec::Vec;
 use ekf_core::{
@@ -575,6 +577,18 @@ impl Localizer {
             &self.map,
             &self.config.laser_mount,
             window,
+            params,
+        )
+    }
+
+    /// Scores the last scan's lines at each of `poses` in the map, as
+    /// [`relocalize`](Self::relocalize) scores its hypotheses ([`crate::fit_poses`]).
+    pub fn fit_poses(&self, poses: &[Pose2<f64>], params: &RelocalizeParams) -> PoseFits {
+        fit_poses(
+            &self.lines,
+            &self.map,
+            &self.config.laser_mount,
+            poses,
             params,
         )
     }

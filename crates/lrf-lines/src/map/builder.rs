@@ -57,9 +57,10 @@ struct Wall {
 /// `(x_s, y_s, θ_s)`, becomes the world line `ρ = r + x_s cos β + y_s sin β`, `β = ψ + θ_s`
 /// with covariance `J Σ Jᵀ`, `J = [[1, −x_s sin β + y_s cos β], [0, 1]]` (the pose is
 /// taken as exact). It is fused into the existing wall with the smallest
-/// `D² = dᵀ (Σ_wall + Σ + T)⁻¹ d`, `d = (Δρ, wrap(Δβ))` (after expressing both lines with
-/// normals less than 90° apart), `T = diag(tolerance_rho², tolerance_beta²)`, among the
-/// walls that
+/// `D² = dᵀ (Σ_wall + Σ + J T Jᵀ)⁻¹ d`, `d = (Δρ, wrap(Δβ))` (after expressing both lines
+/// with normals less than 90° apart), `T = diag(tolerance_rho², tolerance_beta²)` the
+/// tolerance on the offset and direction where the two segments are (`J = [[1, t], [0,
+/// 1]]`, `t` the middle of their extents along the line), among the walls that
 /// 1. pass the gate `D² ≤ χ²₂⁻¹(gate_probability)`, and
 /// 2. are collinear neighbours: projected onto the wall's line, the two segments overlap
 ///    or leave a gap of at most `max_gap`.
@@ -187,16 +188,27 @@ impl MapBuilder {
             b_line.rho - a.line.rho,
             angle_diff(b_line.beta, a.line.beta),
         );
-        let s = a.covariance + b_cov + self.tolerance;
+        let (a0, a1) = interval_along(&a.line, &a.start, &a.end);
+        let (b0, b1) = interval_along(&a.line, &b.start, &b.end);
+        let tolerance = tolerance_at(&self.tolerance, 0.5 * (a0.min(b0) + a1.max(b1)));
+        let s = a.covariance + b_cov + tolerance;
         let d2 = d.dot(&(s.try_inverse()? * d));
         if !self.gate.accepts(d2) {
             return None;
         }
-        let (a0, a1) = interval_along(&a.line, &a.start, &a.end);
-        let (b0, b1) = interval_along(&a.line, &b.start, &b.end);
         let gap = a0.max(b0) - a1.min(b1);
         (gap <= self.params.max_gap).then_some(d2)
     }
+}
+
+/// The tolerance `T` on a wall's offset and direction at the point `t` along its line
+/// (where the walls being compared are), as a covariance of the world line `(ρ, β)`:
+/// `J T Jᵀ`, `J = [[1, t], [0, 1]]`. Turning a line by `δβ` about the foot of its normal
+/// from the origin moves it by `t δβ` at `t`, so a direction tolerance taken at the origin
+/// would let walls far from it pass metres apart (2° at 70 m is 2.4 m).
+fn tolerance_at(tolerance: &Matrix2<f64>, t: f64) -> Matrix2<f64> {
+    let j = Matrix2::new(1.0, t, 0.0, 1.0);
+    j * tolerance * j.transpose()
 }
 
 /// One observed line as a wall in the world frame, or `None` if it has zero length.

@@ -117,7 +117,7 @@ pub fn simulate(
 }
 
 /// A visible piece of a wall: consecutive beams hitting the same wall with noise-free
-/// points at most `max_gap` apart.
+/// points at most `max_gap(ρ_a, ρ_b)` apart (`ρ` their ranges).
 #[derive(Debug, Clone, Copy)]
 pub struct Piece {
     pub wall: usize,
@@ -133,7 +133,7 @@ pub fn visible_pieces(
     walls: &[Wall],
     pose: &Pose2<f64>,
     scanner: &Scanner,
-    max_gap: f64,
+    max_gap: &dyn Fn(f64, f64) -> f64,
 ) -> Vec<Piece> {
     let mut pieces: Vec<(Piece, Point2<f64>, Point2<f64>)> = Vec::new();
     let mut open = false;
@@ -145,7 +145,8 @@ pub fn visible_pieces(
         };
         let p = Point2::new(t * phi.cos(), t * phi.sin());
         if let Some((piece, first, last)) = pieces.last_mut() {
-            if open && piece.wall == k && (p - *last).norm() <= max_gap {
+            let gap = max_gap(last.coords.norm(), t);
+            if open && piece.wall == k && (p - *last).norm() <= gap {
                 *last = p;
                 piece.num_points += 1;
                 piece.length = (p - *first).norm();
