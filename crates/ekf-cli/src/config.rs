@@ -76,6 +76,26 @@ pub struct Config {
     pub devices: crate::devices::DevicesConfig,
     /// GPS fixes as position measurements.
     pub gps: GpsConfig,
+    /// How late a measurement may be and still be fused at its stamp.
+    pub timing: TimingConfig,
+}
+
+/// Measurements fused at their own stamps (`replay::reorder`): replay holds each input
+/// back until one stamped `max_lag` later has been read, and fuses them in stamp order.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct TimingConfig {
+    /// Longest a measurement may be logged after inputs stamped later than it and still be
+    /// fused at its stamp (s); later ones are dropped and counted. 0 fuses in log order.
+    pub max_lag: f64,
+}
+
+impl Default for TimingConfig {
+    /// 0.5 s: robot_localization's usual `history_length` order, well above the few
+    /// hundred milliseconds a busy robot computer takes to log a scan.
+    fn default() -> Self {
+        Self { max_lag: 0.5 }
+    }
 }
 
 /// GPS fixes (`sensor_msgs/NavSatFix`) as position measurements: each fix is projected
@@ -350,6 +370,13 @@ impl Config {
                     &format!("expected a finite number, found {v}"),
                 ));
             }
+        }
+        let lag = self.timing.max_lag;
+        if !(lag.is_finite() && (0.0..=60.0).contains(&lag)) {
+            return Err(invalid(
+                "timing.max_lag",
+                &format!("expected seconds in [0, 60], found {lag}"),
+            ));
         }
         if self.gps.origin_latitude.is_nan() || self.gps.origin_latitude.abs() > 89.0 {
             return Err(invalid(

@@ -469,7 +469,7 @@ impl<'a> Live<'a> {
         )?;
         let mut recorder = Recorder::new(Path::new(&name));
         let message = recorder.record_at(run.output(), &config.topics.tf_static, t0, &tf)?;
-        run.handle(&message)?;
+        run.handle(&message, message.log_time)?;
         Ok(Self {
             config,
             run,
@@ -637,7 +637,7 @@ impl<'a> Live<'a> {
         message: &M,
     ) -> Result<(), LiveError> {
         let m = self.recorder.record(self.run.output(), topic, message)?;
-        self.run.handle(&m)?;
+        self.run.handle(&m, m.log_time)?;
         Ok(())
     }
 

@@ -14,6 +14,7 @@ pub mod accuracy;
 pub mod consistency;
 pub mod inputs;
 pub mod outputs;
+pub mod reorder;
 mod sink;
 pub mod summary;
 pub mod tracking;
@@ -380,17 +381,35 @@ pub fn replay(
     let total: u64 = bag.topics().iter().map(|t| t.message_count).sum();
     let mut failure = None;
     let mut done = 0;
-    for message in bag.messages()? {
-        let step = message
-            .map_err(ReplayError::from)
-            .and_then(|m| run.handle(&m));
-        if let Err(e) = step {
-            failure = Some(e);
-            break;
+    let mut order = reorder::Reorder::new((config.timing.max_lag * 1e9) as u64);
+    let mut read_failure = None;
+    'read: for message in bag.messages()? {
+        let message = match message {
+            Ok(m) => m,
+            Err(e) => {
+                read_failure = Some(e.into());
+                break;
+            }
+        };
+        if let Err(late) = order.push(message) {
+            run.too_late(&late);
+        }
+        while let Some((stamp, ready)) = order.pop_ready() {
+            if let Err(e) = run.handle(&ready, stamp) {
+                failure = Some(e);
+                break 'read;
+            }
         }
         done += 1;
         progress(done, total);
     }
+    // What was read before the end (or the damage) is fused, in stamp order.
+    while let Some((stamp, ready)) = order.pop().filter(|_| failure.is_none()) {
+        if let Err(e) = run.handle(&ready, stamp) {
+            failure = Some(e);
+        }
+    }
+    let failure = failure.or(read_failure);
     run.finish(started, failure)
 }
 
@@ -786,8 +805,9 @@ impl<'a> Run<'a> {
         })
     }
 
-    /// One message.
-    pub(crate) fn handle(&mut self, message: &BagMessage) -> Result<(), ReplayError> {
+    /// One message, fused at `now` (its header stamp, or its log time; warnings name its
+    /// log time).
+    pub(crate) fn handle(&mut self, message: &BagMessage, now: u64) -> Result<(), ReplayError> {
         let topic = message.topic();
         *self
             .summary
@@ -795,27 +815,26 @@ impl<'a> Run<'a> {
             .entry(topic.to_owned())
             .or_default() += 1;
         let t = &self.config.topics;
-        let now = message.log_time;
         let is_motion = if self.use_joints {
             topic == t.joint_states
         } else {
             topic == t.odom
         };
         if is_motion {
-            self.motion(message)
+            self.motion(message, now)
         } else if topic == t.scan {
-            self.scan(message)
+            self.scan(message, now)
         } else if topic == t.compass && self.mode.uses_compass() {
-            self.compass(message)
+            self.compass(message, now)
         } else if topic == t.fix && self.config.gps.fuse {
-            self.gps(message)
+            self.gps(message, now)
         } else if topic == t.ground_truth {
             if let Some(pose) = reference_pose(message) {
                 self.poses.reference(StampedPose::new(now, pose));
             } else {
                 self.summary.warn(
                     topic,
-                    now,
+                    message.log_time,
                     "reference pose is not finite or not decodable".into(),
                 );
             }
@@ -831,8 +850,7 @@ impl<'a> Run<'a> {
         }
     }
 
-    fn motion(&mut self, message: &BagMessage) -> Result<(), ReplayError> {
-        let now = message.log_time;
+    fn motion(&mut self, message: &BagMessage, now: u64) -> Result<(), ReplayError> {
         let topic = message.topic();
         self.tracking.motion(now);
         let step = match message.decode()? {
@@ -859,7 +877,7 @@ impl<'a> Run<'a> {
             _ => return Ok(()),
         };
         match step {
-            Err(skip) => self.skip(topic, now, skip),
+            Err(skip) => self.skip(topic, message.log_time, skip),
             Ok((step, t0, t1)) => {
                 if self.apply_motion(step, t0, t1)? {
                     self.summary.motion_steps += 1;
@@ -944,8 +962,7 @@ impl<'a> Run<'a> {
         }
     }
 
-    fn compass(&mut self, message: &BagMessage) -> Result<(), ReplayError> {
-        let now = message.log_time;
+    fn compass(&mut self, message: &BagMessage, now: u64) -> Result<(), ReplayError> {
         if now < self.start_ns {
             return Ok(());
         }
@@ -958,7 +975,7 @@ impl<'a> Run<'a> {
         let h = match heading {
             Ok(h) => h,
             Err(skip) => {
-                self.skip(message.topic(), now, skip);
+                self.skip(message.topic(), message.log_time, skip);
                 return Ok(());
             }
         };
@@ -998,8 +1015,7 @@ impl<'a> Run<'a> {
     }
 
     /// A GPS fix as a position in the map ([`crate::config::GpsConfig`]).
-    fn gps(&mut self, message: &BagMessage) -> Result<(), ReplayError> {
-        let now = message.log_time;
+    fn gps(&mut self, message: &BagMessage, now: u64) -> Result<(), ReplayError> {
         if now < self.start_ns {
             return Ok(());
         }
@@ -1010,7 +1026,7 @@ impl<'a> Run<'a> {
         let Some((x, y, covariance)) = gps_position(&fix, &self.config.gps, map_offset) else {
             self.summary.warn(
                 message.topic(),
-                now,
+                message.log_time,
                 "GPS fix without a position (no fix, or not finite)".into(),
             );
             return Ok(());
@@ -1033,8 +1049,7 @@ impl<'a> Run<'a> {
         self.record_pose(now)
     }
 
-    fn scan(&mut self, message: &BagMessage) -> Result<(), ReplayError> {
-        let now = message.log_time;
+    fn scan(&mut self, message: &BagMessage, now: u64) -> Result<(), ReplayError> {
         self.summary.lines.scans += 1;
         if now < self.start_ns {
             return Ok(());
@@ -1057,7 +1072,8 @@ impl<'a> Run<'a> {
             {
                 Ok(r) => r,
                 Err(LocalizerError::Extraction(e)) => {
-                    self.summary.warn(message.topic(), now, e.to_string());
+                    self.summary
+                        .warn(message.topic(), message.log_time, e.to_string());
                     return Ok(());
                 }
                 Err(e) => return Err(e.into()),
@@ -1187,6 +1203,7 @@ impl<'a> Run<'a> {
         }
         if self.tracking.lost_for == 0 {
             if gap || lost_now {
+                self.tracking.declared = true;
                 let counts = &mut self.summary.tracking;
                 counts.losses += 1;
                 counts.motion_gaps += u64::from(gap);
@@ -1203,7 +1220,9 @@ impl<'a> Run<'a> {
             // Regained by tracking alone.
             self.tracking.lost_for = 0;
             self.tracking.verification = None;
-            self.tracking_status(now, 0, "tracking again: the scan's lines fused")?;
+            if std::mem::replace(&mut self.tracking.declared, false) {
+                self.tracking_status(now, 0, "tracking again: the scan's lines fused")?;
+            }
             return Ok(report);
         }
         let verify = !gap && (lost_now || self.tracking.lost_for > 0);
@@ -1316,6 +1335,19 @@ impl<'a> Run<'a> {
         }
     }
 
+    /// A message that came after the lag: counted and named, not fused.
+    fn too_late(&mut self, late: &reorder::TooLate) {
+        self.summary.too_late += 1;
+        self.summary.warn(
+            &late.topic,
+            late.log_time,
+            format!(
+                "stamped {} ns, before {} ns already fused: more than [timing] max_lag late, dropped",
+                late.stamp, late.after
+            ),
+        );
+    }
+
     /// An `ekf/tracking` diagnostics message: a loss (level 2) or its end (level 0).
     fn tracking_status(&mut self, now: u64, level: u8, message: &str) -> Result<(), ReplayError> {
         let Some(out) = self.out.as_mut() else {
@@ -1372,8 +1404,8 @@ mod tests {
         topic: &str,
         m: &M,
     ) {
-        run.handle(&recorder.record(None, topic, m).unwrap())
-            .unwrap();
+        let message = recorder.record(None, topic, m).unwrap();
+        run.handle(&message, message.log_time).unwrap();
     }
 
     #[test]

@@ -195,6 +195,9 @@ pub struct ReplaySummary {
     pub wall_time_s: f64,
     /// Messages skipped, in total.
     pub warning_count: u64,
+    /// Of those, messages stamped before one already fused, more than `[timing] max_lag`
+    /// late (`replay::reorder`).
+    pub too_late: u64,
     /// The first skipped messages with their reasons (at most 20).
     pub warnings: Vec<Warning>,
     /// Accuracy against the reference, when the log has one.

@@ -87,8 +87,9 @@ pub struct TrackingCounts {
     pub searches: u64,
     /// Searches whose best pose was ambiguous or failed verification.
     pub refused: u64,
-    /// Scans that ended with the filter lost: their poses are the filter's guess, not a
-    /// tracked estimate.
+    /// Scans that ended with the filter lost (from a loss until it was regained) or
+    /// unconfirmed (a check's search refused while the heading was uncertain, until lines
+    /// fused again): their poses are the filter's guess, not a tracked estimate.
     pub scans_lost: u64,
     /// Scans the filter had been lost for when the log ended (0: tracking).
     pub lost_at_end: u32,
@@ -113,8 +114,11 @@ pub struct Tracking {
     pub last_motion_ns: Option<u64>,
     /// Scans in a row with lines and none fused.
     pub unfused: u32,
-    /// Scans spent lost (0: tracking).
+    /// Scans spent lost (0: tracking), or unconfirmed after a refused check.
     pub lost_for: u32,
+    /// A loss was declared (a motion gap, unfused scans, or the start of a global
+    /// localization) and has not ended: its end is reported.
+    pub declared: bool,
     /// Started without a pose (global localization) and not yet locked on.
     pub unlocked: bool,
     /// A search's candidates being judged over the next scans.
@@ -144,6 +148,7 @@ impl Tracking {
             enabled: true,
             unlocked: true,
             lost_for: GLOBAL_AFTER_SCANS,
+            declared: true,
             ..Self::default()
         }
     }
@@ -156,6 +161,7 @@ impl Tracking {
         }
         self.lost_for = 0;
         self.unfused = 0;
+        self.declared = false;
     }
 
     /// A motion message at `t_ns`.
