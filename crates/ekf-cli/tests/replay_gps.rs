@@ -19,7 +19,8 @@ const ORIGIN: GeoOrigin = GeoOrigin {
 
 /// 60 s driving east at 0.5 m/s from the origin. The encoders report the right wheel 2 %
 /// fast, so dead reckoning curves left; fixes once a second at the true position with a
-/// deterministic ±0.5 m error, and at 30 s one fix 40 m off.
+/// deterministic ±0.5 m error, at 30 s one fix 40 m off, and at 40.5 s a second fix
+/// off the globe with a zero covariance.
 fn write_log(path: &Path) {
     let mut bag = BagWriter::create(path).unwrap();
     let (r, dt) = (0.05, 0.1);
@@ -62,6 +63,13 @@ fn write_log(path: &Path) {
             fix.position_covariance[8] = 1.0;
             fix.position_covariance_type = NavSatFix::COVARIANCE_TYPE_DIAGONAL_KNOWN;
             bag.write("/fix", &fix).unwrap();
+            if k == 405 {
+                // A receiver's garbage: off the globe, reporting an exact position.
+                fix.latitude = 100.67;
+                fix.longitude = 181.5;
+                fix.position_covariance = [0.0; 9];
+                bag.write("/fix", &fix).unwrap();
+            }
         }
     }
     bag.finish().unwrap();
@@ -95,6 +103,15 @@ fn fixes_pull_a_drifting_estimate_back_and_an_outlier_is_refused() {
     let on = replay(&log, &["--config", config.to_str().unwrap()]);
     assert_eq!(on["gps"]["accepted"], 59, "{on}");
     assert_eq!(on["gps"]["rejected"], 1, "{on}");
+    // The garbage fix is neither: refused before the gate, with the reason.
+    assert_eq!(on["warning_count"], 1, "{on}");
+    let warning = &on["warnings"][0];
+    assert_eq!(warning["topic"], "/fix");
+    let reason = warning["reason"].as_str().unwrap();
+    assert!(
+        reason.contains("off the globe: latitude 100.67°"),
+        "{reason}"
+    );
     let rmse = on["accuracy"]["position_rmse_m"].as_f64().unwrap();
     assert!(rmse < 1.0, "{on}");
 

@@ -31,6 +31,15 @@ pub enum Skip {
     },
     /// The first message of a differentiated or delta stream only sets the start.
     First,
+    /// A field is finite but physically impossible or unusable.
+    Implausible {
+        /// The field.
+        field: &'static str,
+        /// What it should be.
+        expected: &'static str,
+        /// What it was.
+        found: f64,
+    },
 }
 
 impl std::fmt::Display for Skip {
@@ -56,6 +65,11 @@ impl std::fmt::Display for Skip {
                 write!(f, "{field} not provided ({field}_covariance[0] = -1)")
             }
             Skip::First => write!(f, "first message sets the start"),
+            Skip::Implausible {
+                field,
+                expected,
+                found,
+            } => write!(f, "{field}: expected {expected}, found {found}"),
         }
     }
 }
@@ -189,20 +203,82 @@ pub struct Heading {
     pub variance: Option<f64>,
 }
 
+/// Why a GPS fix is not fused.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum FixRefused {
+    /// `status.status` below `STATUS_FIX`.
+    NoFix {
+        /// The status.
+        status: i8,
+    },
+    /// Latitude or longitude not finite or off the globe.
+    OffTheGlobe {
+        /// Latitude (degrees).
+        latitude: f64,
+        /// Longitude (degrees).
+        longitude: f64,
+    },
+    /// The covariance is declared known but its east/north block is not finite, not
+    /// positive definite, or zero.
+    BadCovariance {
+        /// `position_covariance[0]` (m²).
+        east: f64,
+        /// `position_covariance[4]` (m²).
+        north: f64,
+        /// `position_covariance[1]` (m²).
+        coupling: f64,
+    },
+}
+
+impl std::fmt::Display for FixRefused {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            FixRefused::NoFix { status } => {
+                write!(f, "GPS fix without a position (status {status})")
+            }
+            FixRefused::OffTheGlobe {
+                latitude,
+                longitude,
+            } => write!(
+                f,
+                "GPS fix off the globe: latitude {latitude}° (expected within ±90), longitude \
+                 {longitude}° (expected within ±180)"
+            ),
+            FixRefused::BadCovariance {
+                east,
+                north,
+                coupling,
+            } => write!(
+                f,
+                "GPS fix with a known position_covariance that is not positive definite: \
+                 east {east} m², north {north} m², coupling {coupling} m²"
+            ),
+        }
+    }
+}
+
 /// A GPS fix as a position `(x, y)` in the map and its 2×2 covariance (m²): projected
 /// onto the east–north tangent plane about `gps`'s origin and rotated by `map_offset`
 /// (the map's rotation from ENU, as for the compass). The covariance is the fix's east /
-/// north block when it has one, else `gps.sigma²` per axis. `None` for a fix without a
-/// position (status no fix, or not finite).
+/// north block when its type says it is known, else `gps.sigma²` per axis. Refused
+/// ([`FixRefused`]): a fix without a position, one off the globe, and one whose known
+/// covariance is not finite and positive definite (a receiver reporting HDOP 0 gives a
+/// zero one, which would make the fix exact).
 pub fn gps_position(
     fix: &NavSatFix,
     gps: &GpsConfig,
     map_offset: f64,
-) -> Option<(f64, f64, Matrix2<f64>)> {
-    if fix.status.status < NavSatStatus::STATUS_FIX
-        || !(fix.latitude.is_finite() && fix.longitude.is_finite())
-    {
-        return None;
+) -> Result<(f64, f64, Matrix2<f64>), FixRefused> {
+    if fix.status.status < NavSatStatus::STATUS_FIX {
+        return Err(FixRefused::NoFix {
+            status: fix.status.status,
+        });
+    }
+    if !(fix.latitude.abs() <= 90.0 && fix.longitude.abs() <= 180.0) {
+        return Err(FixRefused::OffTheGlobe {
+            latitude: fix.latitude,
+            longitude: fix.longitude,
+        });
     }
     let origin = GeoOrigin {
         latitude: gps.origin_latitude,
@@ -212,19 +288,26 @@ pub fn gps_position(
     let (east, north) = origin.local(fix.latitude, fix.longitude);
     let c = &fix.position_covariance;
     let block = Matrix2::new(c[0], c[1], c[3], c[4]);
-    let known = fix.position_covariance_type != NavSatFix::COVARIANCE_TYPE_UNKNOWN
-        && block.iter().all(|v| v.is_finite())
-        && c[0] > 0.0
-        && c[4] > 0.0;
-    let enu = if known {
-        block
-    } else {
+    let enu = if fix.position_covariance_type == NavSatFix::COVARIANCE_TYPE_UNKNOWN {
         Matrix2::identity() * gps.sigma * gps.sigma
+    } else {
+        let positive = block.iter().all(|v| v.is_finite())
+            && c[0] > 0.0
+            && c[4] > 0.0
+            && c[0] * c[4] - c[1] * c[3] > 0.0;
+        if !positive {
+            return Err(FixRefused::BadCovariance {
+                east: c[0],
+                north: c[4],
+                coupling: c[1],
+            });
+        }
+        block
     };
     let (s, co) = map_offset.sin_cos();
     let r = Matrix2::new(co, -s, s, co);
     let p = r * Vector2::new(east, north);
-    Some((p.x, p.y, r * enu * r.transpose()))
+    Ok((p.x, p.y, r * enu * r.transpose()))
 }
 
 /// An `Imu`'s yaw (already ENU) rotated into the map frame; its variance from
@@ -247,12 +330,39 @@ pub fn heading_from_imu(
             field: "orientation",
         });
     }
-    let variance = (c[8].is_finite() && c[8] > 0.0).then_some(c[8]);
+    let q = &msg.orientation;
+    let norm = (q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z).sqrt();
+    if (norm - 1.0).abs() > UNIT_QUATERNION_TOLERANCE {
+        return Err(Skip::Implausible {
+            field: "orientation",
+            expected: "a unit quaternion (norm within 0.01 of 1)",
+            found: norm,
+        });
+    }
+    if c[8].is_nan() || c[8] < 0.0 {
+        return Err(Skip::Implausible {
+            field: "orientation_covariance[8]",
+            expected: "a yaw variance ≥ 0 (0: unknown)",
+            found: c[8],
+        });
+    }
+    let variance = (c[8] > 0.0).then_some(c[8]);
     Ok(Heading {
         heading: wrap_angle(yaw + calibration.map_offset),
         variance,
     })
 }
+
+/// Largest departure of an `Imu` orientation's norm from 1: a normalised quaternion
+/// from a real driver is off by rounding (about 1e-7), so more means the message is
+/// broken, and its yaw would be one of a scaled rotation.
+const UNIT_QUATERNION_TOLERANCE: f64 = 0.01;
+
+/// Smallest share of a magnetometer's field in the horizontal plane for its direction to
+/// be a heading: the Earth's field dips at most about 80° outside the polar regions
+/// (horizontal share 0.17), and at 87° (0.05) a percent of noise on the vertical
+/// component turns the bearing by several degrees.
+const MIN_HORIZONTAL_SHARE: f64 = 0.05;
 
 /// A calibrated magnetometer reading: the field's horizontal direction in the robot frame
 /// is magnetic north, so the bearing (clockwise from magnetic north) is
@@ -262,9 +372,19 @@ pub fn heading_from_magnetic_field(
     calibration: &CompassCalibrationConfig,
 ) -> Result<Heading, Skip> {
     let m = &msg.magnetic_field;
-    if !(m.x.is_finite() && m.y.is_finite()) || (m.x == 0.0 && m.y == 0.0) {
+    if !(m.x.is_finite() && m.y.is_finite() && m.z.is_finite()) || (m.x == 0.0 && m.y == 0.0) {
         return Err(Skip::NonFinite {
             field: "magnetic_field",
+        });
+    }
+    let horizontal = m.x.hypot(m.y);
+    let share = horizontal / horizontal.hypot(m.z);
+    if share < MIN_HORIZONTAL_SHARE {
+        return Err(Skip::Implausible {
+            field: "magnetic_field",
+            expected: "a horizontal component of at least 5 % of the field (inclination \
+                       under 87°)",
+            found: share,
         });
     }
     let bearing = m.y.atan2(m.x);
@@ -366,7 +486,58 @@ mod tests {
         let (_, _, c) = gps_position(&fix, &gps, std::f64::consts::FRAC_PI_2).unwrap();
         assert!((c[(0, 0)] - 1.0).abs() < 1e-12 && (c[(1, 1)] - 4.0).abs() < 1e-12);
         fix.status.status = NavSatStatus::STATUS_NO_FIX;
-        assert_eq!(gps_position(&fix, &gps, 0.0), None);
+        assert_eq!(
+            gps_position(&fix, &gps, 0.0),
+            Err(FixRefused::NoFix { status: -1 })
+        );
+    }
+
+    #[test]
+    fn implausible_fixes_are_refused_with_the_reason() {
+        let gps = GpsConfig::default();
+        let fix = |latitude: f64, longitude: f64| NavSatFix {
+            latitude,
+            longitude,
+            ..NavSatFix::default()
+        };
+        for (lat, lon) in [
+            (100.67, 10.0),
+            (10.0, 181.5),
+            (f64::NAN, 0.0),
+            (0.0, f64::INFINITY),
+        ] {
+            let refused = gps_position(&fix(lat, lon), &gps, 0.0).unwrap_err();
+            assert!(
+                matches!(refused, FixRefused::OffTheGlobe { .. }),
+                "{lat} {lon}"
+            );
+        }
+        assert_eq!(
+            gps_position(&fix(100.67, 181.5), &gps, 0.0)
+                .unwrap_err()
+                .to_string(),
+            "GPS fix off the globe: latitude 100.67° (expected within ±90), longitude 181.5° \
+             (expected within ±180)"
+        );
+        // A known covariance of zero (HDOP 0), NaN, negative or not positive definite.
+        for (east, north, coupling) in [
+            (0.0, 0.0, 0.0),
+            (f64::NAN, 1.0, 0.0),
+            (-1.0, 1.0, 0.0),
+            (1.0, 1.0, 2.0),
+        ] {
+            let mut f = fix(10.0, 10.0);
+            f.position_covariance[0] = east;
+            f.position_covariance[4] = north;
+            f.position_covariance[1] = coupling;
+            f.position_covariance[3] = coupling;
+            f.position_covariance_type = NavSatFix::COVARIANCE_TYPE_APPROXIMATED;
+            let refused = gps_position(&f, &gps, 0.0).unwrap_err();
+            assert!(
+                matches!(refused, FixRefused::BadCovariance { .. }),
+                "{east} {north} {coupling}"
+            );
+        }
     }
     use crate::ros2::geometry_msgs::{Quaternion, Transform, Vector3};
     use crate::ros2::std_msgs::Header;
@@ -526,12 +697,43 @@ mod tests {
         assert!((h.heading - 0.2).abs() < 1e-12 && h.variance == Some(4e-4));
         imu.orientation_covariance[8] = 0.0;
         assert_eq!(heading_from_imu(&imu, &cal).unwrap().variance, None);
+        imu.orientation_covariance[8] = f64::NAN;
+        assert_eq!(
+            heading_from_imu(&imu, &cal).unwrap_err().to_string(),
+            "orientation_covariance[8]: expected a yaw variance ≥ 0 (0: unknown), found NaN"
+        );
+        imu.orientation_covariance[8] = -4e-4;
+        assert!(heading_from_imu(&imu, &cal).is_err());
+        imu.orientation_covariance[8] = 0.0;
+        let mut scaled = imu.clone();
+        scaled.orientation.w *= 1.5;
+        scaled.orientation.z *= 1.5;
+        assert!(matches!(
+            heading_from_imu(&scaled, &cal),
+            Err(Skip::Implausible { field: "orientation", found, .. }) if (found - 1.5).abs() < 1e-12
+        ));
         imu.orientation_covariance[0] = -1.0;
         let skip = heading_from_imu(&imu, &cal).unwrap_err();
         assert_eq!(
             skip.to_string(),
             "orientation not provided (orientation_covariance[0] = -1)"
         );
+        // A field that points nearly straight down has no usable direction.
+        let vertical = MagneticField {
+            magnetic_field: Vector3 {
+                x: 1e-7,
+                y: 1e-7,
+                z: -5e-5,
+            },
+            ..MagneticField::default()
+        };
+        assert!(matches!(
+            heading_from_magnetic_field(&vertical, &cal),
+            Err(Skip::Implausible {
+                field: "magnetic_field",
+                ..
+            })
+        ));
     }
 
     #[test]

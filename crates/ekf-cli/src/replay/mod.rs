@@ -1023,13 +1023,13 @@ impl<'a> Run<'a> {
             return Ok(());
         };
         let map_offset = self.config.compass_calibration.map_offset;
-        let Some((x, y, covariance)) = gps_position(&fix, &self.config.gps, map_offset) else {
-            self.summary.warn(
-                message.topic(),
-                message.log_time,
-                "GPS fix without a position (no fix, or not finite)".into(),
-            );
-            return Ok(());
+        let (x, y, covariance) = match gps_position(&fix, &self.config.gps, map_offset) {
+            Ok(position) => position,
+            Err(refused) => {
+                self.summary
+                    .warn(message.topic(), message.log_time, refused.to_string());
+                return Ok(());
+            }
         };
         self.catch_up(
             fix.header
