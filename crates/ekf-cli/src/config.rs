@@ -319,6 +319,10 @@ impl Config {
             ("initial.sigma_theta", self.initial.sigma_theta),
             ("localizer.compass.variance", l.compass.variance),
             ("gps.sigma", self.gps.sigma),
+            (
+                "devices.max_wheel_turns_per_s",
+                self.devices.max_wheel_turns_per_s,
+            ),
         ];
         for (key, v) in positive {
             if !(v.is_finite() && v > 0.0) {

@@ -74,21 +74,33 @@ impl std::fmt::Display for Skip {
     }
 }
 
+/// Stamp jitter allowed when an encoder increment is judged against the fastest the
+/// wheels can turn (s): a reading stamped when it was received can be late by a
+/// scheduling delay, and the next one then comes soon after it with a normal increment.
+const STAMP_JITTER_S: f64 = 0.05;
+
 /// Wheel speeds from `sensor_msgs/JointState`: the difference of `position` over the stamp
 /// difference (the encoder increment), or `velocity` when the message has no positions.
+/// A wheel that would have turned faster than the robot's wheels can is a broken reading
+/// (an encoder spike or jump, a counter reset): it is skipped, and the next increment is
+/// taken from it, so a spike costs two readings and a jump one.
 #[derive(Debug, Clone)]
 pub struct WheelTracker {
     left: String,
     right: String,
+    /// Fastest plausible wheel speed (rad/s).
+    max_speed: f64,
     previous: Option<(u64, f64, f64)>,
 }
 
 impl WheelTracker {
-    /// Tracks the joints named `left` and `right`.
-    pub fn new(left: &str, right: &str) -> Self {
+    /// Tracks the joints named `left` and `right`, whose wheels turn at most
+    /// `max_turns_per_s` (the configuration's `devices.max_wheel_turns_per_s`).
+    pub fn new(left: &str, right: &str, max_turns_per_s: f64) -> Self {
         Self {
             left: left.into(),
             right: right.into(),
+            max_speed: max_turns_per_s * core::f64::consts::TAU,
             previous: None,
         }
     }
@@ -124,6 +136,15 @@ impl WheelTracker {
         // The encoder increment over the interval is exact; a velocity in the same message
         // is one sample at its end, so it is not used (paper eqs. 1–2 integrate ω over Δt).
         let dt = (stamp_ns - t0) as f64 * 1e-9;
+        let largest = (pl - pl0).abs().max((pr - pr0).abs());
+        if largest > self.max_speed * (dt + STAMP_JITTER_S) {
+            return Ok(Err(Skip::Implausible {
+                field: "position",
+                expected: "an encoder increment the wheels can make in the interval \
+                           (devices.max_wheel_turns_per_s, 50 ms of stamp jitter allowed; rad)",
+                found: largest,
+            }));
+        }
         Ok(WheelSpeeds::from_increments(pl - pl0, pr - pr0, dt)
             .map_err(|_| Skip::NonFinite { field: "position" }))
     }
@@ -553,8 +574,35 @@ mod tests {
     }
 
     #[test]
+    fn an_encoder_spike_costs_two_readings_and_a_jump_one() {
+        let mut w = WheelTracker::new("l", "r", 10.0);
+        let at = |w: &mut WheelTracker, k: u64, left: f64| {
+            w.speeds(
+                k * 100_000_000,
+                &joints(&["l", "r"], vec![left, 0.0], vec![]),
+            )
+            .unwrap()
+        };
+        assert_eq!(at(&mut w, 0, 0.0), Err(Skip::First));
+        assert!(at(&mut w, 1, 0.1).is_ok());
+        // +100.1 rad in 0.1 s: 10 turns/s (62.8 rad/s) allow 9.4 rad in 0.15 s.
+        let spike = at(&mut w, 2, 100.2);
+        assert!(
+            matches!(spike, Err(Skip::Implausible { field: "position", found, .. }) if (found - 100.1).abs() < 1e-9),
+            "{spike:?}"
+        );
+        assert!(at(&mut w, 3, 0.3).is_err(), "back down from the spike");
+        let s = at(&mut w, 4, 0.4).unwrap();
+        assert!((s.left - 1.0).abs() < 1e-9, "{s:?}");
+        // A jump that stays: one reading lost, then increments from the new count.
+        assert!(at(&mut w, 5, 100.5).is_err());
+        let s = at(&mut w, 6, 100.6).unwrap();
+        assert!((s.left - 1.0).abs() < 1e-9, "{s:?}");
+    }
+
+    #[test]
     fn wheel_speeds_from_positions_and_velocities() {
-        let mut w = WheelTracker::new("l", "r");
+        let mut w = WheelTracker::new("l", "r", 10.0);
         assert_eq!(
             w.speeds(0, &joints(&["r", "l"], vec![0.0, 0.0], vec![]))
                 .unwrap(),
@@ -622,7 +670,7 @@ mod tests {
             "{s:?}"
         );
         // Velocities only: the interval is the stamp difference; a NaN velocity is skipped.
-        let mut v = WheelTracker::new("l", "r");
+        let mut v = WheelTracker::new("l", "r", 10.0);
         assert_eq!(
             v.speeds(0, &joints(&["l", "r"], vec![], vec![1.0, 2.0]))
                 .unwrap(),

@@ -718,7 +718,11 @@ impl<'a> Run<'a> {
             summary,
             poses: sink::PoseSink::new(options.tum.as_deref(), options.keep_trajectories)?,
             clock: MotionClock::starting_at(start_ns),
-            wheels: WheelTracker::new(&config.motion.left_joint, &config.motion.right_joint),
+            wheels: WheelTracker::new(
+                &config.motion.left_joint,
+                &config.motion.right_joint,
+                config.devices.max_wheel_turns_per_s,
+            ),
             odometry: OdometryTracker::default(),
             timer: StageTimer {
                 last: Instant::now(),
