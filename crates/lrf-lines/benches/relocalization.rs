@@ -1,5 +1,5 @@
 //! The relocalization search ([`lrf_lines::relocalize`]) over a 500-segment map: the
-//! bundled ACES building map (447 walls) plus 53 of its walls again 1 km away, with the
+//! bundled ACES building map (268 walls) plus 232 of its walls again 1 km away, with the
 //! walls within 8 m of a pose in the building seen as the scan's lines. A local search
 //! (a 3 m window, as after a motion gap) and a search of the whole map.
 
