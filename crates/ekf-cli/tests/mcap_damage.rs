@@ -286,12 +286,17 @@ fn a_file_that_is_not_mcap_does_not_open_and_says_so() {
     let path = dir.path().join("notes.mcap");
     std::fs::write(&path, "# not a bag, but a text file of some length\n").unwrap();
     let err = BagReader::open(&path).unwrap_err();
-    assert_eq!(corrupt_offset(&err), 0, "{err}");
+    assert!(matches!(err, ReadError::NotMcap { .. }), "{err}");
     let text = err.to_string();
     assert!(
-        text.contains("notes.mcap") && text.contains("magic"),
+        text.contains("notes.mcap: not an MCAP bag: a text file"),
         "{text}"
     );
+    // Binary that is not MCAP is corrupt at byte 0: its magic is wrong.
+    std::fs::write(&path, [0u8, 159, 146, 150, 7, 7, 7, 7, 7, 7, 7, 7]).unwrap();
+    let err = BagReader::open(&path).unwrap_err();
+    assert_eq!(corrupt_offset(&err), 0, "{err}");
+    assert!(err.to_string().contains("magic"), "{err}");
 }
 
 #[test]

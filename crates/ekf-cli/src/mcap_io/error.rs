@@ -18,6 +18,16 @@ pub enum ReadError {
         #[source]
         source: std::io::Error,
     },
+    /// The path is not an MCAP bag: what it is instead, and what to do.
+    #[error("{path}: not an MCAP bag: {what}; {hint}", path = path.display())]
+    NotMcap {
+        /// The path given.
+        path: PathBuf,
+        /// What it is.
+        what: String,
+        /// What to do with it.
+        hint: String,
+    },
     /// Reading the file failed.
     #[error("{path}: read error at byte {offset}: {source}", path = path.display())]
     Io {

@@ -31,6 +31,7 @@ mod linear;
 mod message;
 pub mod reader;
 mod recover;
+pub mod sniff;
 mod source;
 mod summary;
 pub mod writer;

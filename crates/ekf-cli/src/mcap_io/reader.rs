@@ -40,14 +40,16 @@ pub struct BagReader {
 }
 
 impl BagReader {
-    /// Opens `path` and lists its topics. Reads the summary; if the summary is missing or
+    /// Opens `path` (an MCAP file, or a ROS 2 bag directory with one `.mcap` storage
+    /// file; a sqlite3 bag or a text file is named as such, [`super::sniff`]) and lists
+    /// its topics. Reads the summary; if the summary is missing or
     /// damaged (a recording cut short), reads the whole file once to rebuild it, checking
     /// every chunk. A damaged file still opens: its intact part can be read, and the
     /// damage is reported after the last message. A damaged file without a single
     /// channel (not MCAP at all, or cut inside its first chunk) is an error naming the
     /// byte offset.
     pub fn open(path: impl AsRef<Path>) -> Result<Self, ReadError> {
-        let path: Arc<Path> = Arc::from(path.as_ref());
+        let path: Arc<Path> = Arc::from(super::sniff::mcap_file(path.as_ref())?.as_path());
         let open_error = |source| ReadError::Open {
             path: path.to_path_buf(),
             source,
