@@ -52,6 +52,14 @@ pub struct RelocalizeParams {
 }
 
 impl RelocalizeParams {
+    /// Whether a pose with `inliers` inlier lines and `score` (m) explains scans of
+    /// `observed_length` (m) well enough to stand: at least
+    /// [`min_inliers`](Self::min_inliers) inliers and half of the observed length
+    /// (weighted by fit). One scan's search or several scans' sums alike.
+    pub fn explains(&self, inliers: usize, score: f64, observed_length: f64) -> bool {
+        inliers >= self.min_inliers && score >= 0.5 * observed_length
+    }
+
     /// Whether pose `a` is elsewhere than `b`: farther than
     /// [`distinct_distance`](Self::distinct_distance) or turned more than
     /// [`distinct_angle`](Self::distinct_angle).
@@ -127,12 +135,15 @@ pub struct Relocalization {
 }
 
 impl Relocalization {
-    /// The best pose has enough inliers, explains at least half of the observed length
-    /// (weighted by fit) and beats every pose elsewhere by `params.min_margin`.
+    /// The best pose explains the scan ([`RelocalizeParams::explains`]).
+    pub fn explains_scan(&self, params: &RelocalizeParams) -> bool {
+        params.explains(self.best.inliers, self.best.score, self.observed_length)
+    }
+
+    /// The best pose explains the scan and beats every pose elsewhere by
+    /// `params.min_margin`.
     pub fn is_unambiguous(&self, params: &RelocalizeParams) -> bool {
-        self.best.inliers >= params.min_inliers
-            && self.best.score >= 0.5 * self.observed_length
-            && self.best.score >= params.min_margin * self.runner_up
+        self.explains_scan(params) && self.best.score >= params.min_margin * self.runner_up
     }
 }
 

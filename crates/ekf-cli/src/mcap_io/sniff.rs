@@ -14,6 +14,10 @@ const MCAP_MAGIC: &[u8] = b"\x89MCAP0\r\n";
 /// The first bytes of every SQLite 3 database.
 const SQLITE_MAGIC: &[u8] = b"SQLite format 3\0";
 
+/// What to do with a sqlite3 bag.
+const CONVERT_DB3: &str = "convert it to MCAP with `ros2 bag convert -i BAG_DIR -o out.yaml`, \
+                           out.yaml saying `output_bags: [{uri: BAG_mcap, storage_id: mcap}]`";
+
 /// The first bytes of a gzip stream.
 const GZIP_MAGIC: &[u8] = b"\x1f\x8b";
 
@@ -37,8 +41,7 @@ pub fn mcap_file(path: &Path) -> Result<PathBuf, ReadError> {
     if head.starts_with(SQLITE_MAGIC) {
         return Err(not_mcap(
             "a SQLite database (a ROS 2 sqlite3 bag, .db3)",
-            "convert it to MCAP with `ros2 bag convert -i BAG_DIR -o out.yaml`, out.yaml \
-             saying `output_bags: [{uri: BAG_mcap, storage_id: mcap}]`",
+            CONVERT_DB3,
         ));
     }
     if head.starts_with(GZIP_MAGIC) {
@@ -91,8 +94,7 @@ fn storage_file(dir: &Path) -> Result<PathBuf, ReadError> {
         )),
         (0, n) => Err(not_mcap(
             format!("a ROS 2 sqlite3 bag directory ({n} .db3 file(s))"),
-            "convert it to MCAP with `ros2 bag convert -i BAG_DIR -o out.yaml`, out.yaml \
-             saying `output_bags: [{uri: BAG_mcap, storage_id: mcap}]`",
+            CONVERT_DB3,
         )),
         (n, _) => Err(not_mcap(
             format!("a bag split into {n} .mcap files"),

@@ -1242,7 +1242,7 @@ impl<'a> Run<'a> {
                 self.tracking.lost_for += 1;
                 return Ok(report);
             };
-            return self.restart_at(scan, now, won, report);
+            return self.restart_at(scan, now, won, &params, report);
         }
         let pose = self.localizer.pose();
         let cov = self.localizer.covariance();
@@ -1252,10 +1252,7 @@ impl<'a> Run<'a> {
         self.summary.tracking.searches += 1;
         let found = self.localizer.relocalize(&window, &params);
         if verify {
-            let nominates = |f: &lrf_lines::Relocalization| {
-                f.best.inliers >= params.min_inliers && f.best.score >= 0.5 * f.observed_length
-            };
-            match found.filter(nominates) {
+            match found.filter(|f| f.explains_scan(&params)) {
                 Some(found) => {
                     self.tracking.verification = Some(verification::Verification::start(&found))
                 }
@@ -1275,7 +1272,7 @@ impl<'a> Run<'a> {
             score: found.best.score,
             runner_up: found.runner_up,
         };
-        self.restart_at(scan, now, won, report)
+        self.restart_at(scan, now, won, &params, report)
     }
 
     /// Restarts the filter at the pose a search found (`won`) unless the estimate is
@@ -1287,9 +1284,9 @@ impl<'a> Run<'a> {
         scan: &crate::ros2::sensor_msgs::LaserScan,
         now: u64,
         won: verification::Verified,
+        params: &RelocalizeParams,
         report: lrf_lines::ScanReport,
     ) -> Result<lrf_lines::ScanReport, ReplayError> {
-        let params = RelocalizeParams::default();
         let best = won.pose;
         if !params.elsewhere(&best, &self.localizer.pose()) {
             // The estimate is where the search puts it.
@@ -1298,7 +1295,7 @@ impl<'a> Run<'a> {
         }
         let saved = self.localizer.clone();
         self.localizer
-            .reset(best, tracking::restart_covariance(&params))?;
+            .reset(best, tracking::restart_covariance(params))?;
         let again = self.localizer.update_scan(&scan.as_scan());
         let verified = match again {
             Ok(r) if r.fused >= tracking::MIN_VERIFIED_LINES => Some(r),

@@ -8,8 +8,10 @@
 //! ([`lrf_lines::Relocalization::candidates`]) are carried by the odometry to each of
 //! the next scans and scored there as the search scores its hypotheses
 //! ([`lrf_lines::fit_poses`]). After [`VERIFY_SCANS`] scans, the candidate with the
-//! highest summed score is taken if it explains at least [`VERIFIED_SHARE`] of the
-//! observed length over those scans and beats every candidate elsewhere by
+//! highest summed score is taken if it explains those scans as a single search's best
+//! pose must explain its scan ([`RelocalizeParams::explains`]: half the summed observed
+//! length; a third let a lone candidate 190 m off on freiburg-campus through) and beats
+//! every candidate elsewhere by
 //! [`RelocalizeParams::min_margin`]; otherwise the filter stays lost and searches again.
 //! A motion gap in between ends the verification: the odometry no longer says where the
 //! candidates went.
@@ -19,12 +21,6 @@ use lrf_lines::{PoseFits, Relocalization, RelocalizeParams};
 
 /// Scans a relocalization is judged over, the search's own included.
 pub const VERIFY_SCANS: u32 = 3;
-
-/// Share of the observed length over those scans the winner must explain: what a single
-/// search asks of its best pose ([`lrf_lines::Relocalization::is_unambiguous`]), here
-/// over the scans together. (A third let a lone candidate 190 m off on freiburg-campus
-/// through, on 35 % of three scans.)
-pub const VERIFIED_SHARE: f64 = 0.5;
 
 /// One candidate pose being verified.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -106,9 +102,8 @@ impl Verification {
         self.scans >= VERIFY_SCANS
     }
 
-    /// The candidate with the highest summed score if it has `params.min_inliers`
-    /// inliers in all, explains at least [`VERIFIED_SHARE`] of the summed observed length
-    /// and beats
+    /// The candidate with the highest summed score if it explains the scans
+    /// ([`RelocalizeParams::explains`], over the sums) and beats
     /// every candidate elsewhere by `params.min_margin`; `None` otherwise.
     pub fn verdict(&self, params: &RelocalizeParams) -> Option<Verified> {
         let best = self
@@ -121,8 +116,7 @@ impl Verification {
             .filter(|c| params.elsewhere(&c.pose, &best.pose))
             .map(|c| c.score)
             .fold(0.0, f64::max);
-        let clear = best.inliers >= params.min_inliers
-            && best.score >= VERIFIED_SHARE * self.observed_length
+        let clear = params.explains(best.inliers, best.score, self.observed_length)
             && best.score >= params.min_margin * runner_up;
         clear.then_some(Verified {
             pose: best.pose,
