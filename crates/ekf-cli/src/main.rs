@@ -26,10 +26,11 @@ struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
-    /// Run the filter over a ROS 2 bag (MCAP): a trajectory (TUM), an MCAP for Foxglove
+    /// Run the filter over a ROS 2 bag (MCAP or sqlite3): a trajectory (TUM), an MCAP for Foxglove
     /// and ROS 2 tools, and a summary (with accuracy when the log has a reference).
     Replay {
-        /// The ROS 2 bag (.mcap).
+        /// The ROS 2 bag: an .mcap or .db3 file, or a bag directory as `ros2 bag record`
+        /// writes it.
         log: PathBuf,
         /// Configuration file (TOML); `ekf config` prints the defaults.
         #[arg(long)]
@@ -47,7 +48,8 @@ enum Command {
         /// scans and start where the search locks on (the summary says at which scan).
         #[arg(long, conflicts_with = "init_from_truth", requires = "map")]
         global: bool,
-        /// Write the estimate, lines, map and diagnostics to this MCAP.
+        /// Write the estimate, lines, map and diagnostics to this MCAP bag (a path ending
+        /// in `/`: a bag directory with metadata.yaml, as `ros2 bag record` writes).
         #[arg(long)]
         out: Option<PathBuf>,
         /// Write the trajectory as TUM text (what evo reads).
@@ -60,7 +62,7 @@ enum Command {
     /// The paper's Fig. 9/10: replay a bag in all four modes (odometry, compass, laser,
     /// laser+compass) and compare each estimate with the log's reference trajectory.
     Compare {
-        /// The ROS 2 bag (.mcap); it needs a reference trajectory (topics.ground_truth).
+        /// The ROS 2 bag (.mcap, .db3 or a bag directory); it needs a reference trajectory (topics.ground_truth).
         log: PathBuf,
         /// Configuration file (TOML); `ekf config` prints the defaults.
         #[arg(long)]
@@ -113,7 +115,8 @@ enum Command {
         /// A built-in scenario (paper, triangle, walls, l-room, corridor) or a line map
         /// (.json) whose room the robot drives around 1 m inside.
         scenario: String,
-        /// The bag to write.
+        /// The bag to write: an MCAP file, or with a path ending in `/` a bag directory
+        /// with metadata.yaml.
         #[arg(long)]
         out: PathBuf,
         /// Noise seed: the same seed gives the same bytes.
@@ -162,7 +165,8 @@ enum Command {
         /// Which sensors the filter uses.
         #[arg(long, value_enum, default_value_t = CliMode::LaserCompass)]
         mode: CliMode,
-        /// Record the raw readings, /tf_static and the estimates to this MCAP.
+        /// Record the raw readings, /tf_static and the estimates to this MCAP bag (a path
+        /// ending in `/`: a bag directory with metadata.yaml).
         #[arg(long)]
         record: Option<PathBuf>,
         /// Print poses and the summary as JSON lines.
@@ -234,17 +238,17 @@ enum Command {
     /// Absolute and relative pose errors of a trajectory against a reference, as `evo`
     /// computes them (same frame, no alignment unless --align).
     Evaluate {
-        /// The estimated trajectory: a TUM file, or an MCAP (its /ekf/pose, else
+        /// The estimated trajectory: a TUM file, or a ROS 2 bag (its /ekf/pose, else
         /// /ground_truth, unless --est-topic names one).
         estimate: PathBuf,
-        /// The reference trajectory: a TUM file, or an MCAP (its /ground_truth unless
+        /// The reference trajectory: a TUM file, or a ROS 2 bag (its /ground_truth unless
         /// --truth-topic names one).
         #[arg(long)]
         truth: PathBuf,
-        /// Pose topic of an MCAP estimate.
+        /// Pose topic of a bag estimate.
         #[arg(long)]
         est_topic: Option<String>,
-        /// Pose topic of an MCAP reference.
+        /// Pose topic of a bag reference.
         #[arg(long, default_value = "/ground_truth")]
         truth_topic: String,
         /// Align the estimate to the reference first (rigid SE(2) Umeyama, as `evo -a`).
@@ -262,7 +266,8 @@ enum ImportFormat {
     Carmen {
         /// The CARMEN log.
         input: PathBuf,
-        /// The bag to write.
+        /// The bag to write: an MCAP file, or with a path ending in `/` a bag directory
+        /// with metadata.yaml.
         #[arg(long)]
         out: PathBuf,
         /// Which flavour the log is: corrected (SLAM poses at the scans, odometry reset
@@ -291,7 +296,8 @@ enum ImportFormat {
     Mrpt {
         /// The MRPT text log.
         input: PathBuf,
-        /// The bag to write.
+        /// The bag to write: an MCAP file, or with a path ending in `/` a bag directory
+        /// with metadata.yaml.
         #[arg(long)]
         out: PathBuf,
         /// Print the summary as JSON.
@@ -305,7 +311,8 @@ enum MapAction {
     /// Build a line map (JSON) from a bag: from its first scan (the paper's global map),
     /// or with --from-truth from every scan placed along the log's reference trajectory.
     Build {
-        /// The ROS 2 bag (.mcap).
+        /// The ROS 2 bag: an .mcap or .db3 file, or a bag directory as `ros2 bag record`
+        /// writes it.
         log: PathBuf,
         /// The map file to write.
         #[arg(long)]

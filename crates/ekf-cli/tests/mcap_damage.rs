@@ -286,10 +286,10 @@ fn a_file_that_is_not_mcap_does_not_open_and_says_so() {
     let path = dir.path().join("notes.mcap");
     std::fs::write(&path, "# not a bag, but a text file of some length\n").unwrap();
     let err = BagReader::open(&path).unwrap_err();
-    assert!(matches!(err, ReadError::NotMcap { .. }), "{err}");
+    assert!(matches!(err, ReadError::NotABag { .. }), "{err}");
     let text = err.to_string();
     assert!(
-        text.contains("notes.mcap: not an MCAP bag: a text file"),
+        text.contains("notes.mcap: not a ROS 2 bag (MCAP or sqlite3): a text file"),
         "{text}"
     );
     // Binary that is not MCAP is corrupt at byte 0: its magic is wrong.

@@ -1,7 +1,7 @@
 //! Bags as robots record them. Measurements logged after their header stamps (a busy
 //! robot computer) are fused at their stamps (`replay::reorder`): the bundled simulated
 //! run, with its scans or its compass headings logged late, places the robot as well as
-//! on time. A ROS 2 bag directory replays as its MCAP storage file.
+//! on time.
 
 use ekf_cli::config::Config;
 use ekf_cli::mcap_io::{BagReader, BagWriter};
@@ -103,25 +103,4 @@ fn inputs_later_than_the_lag_are_dropped_and_counted() {
     let w = &summary.warnings[0];
     assert_eq!(w.topic, "/scan");
     assert!(w.reason.contains("max_lag"), "{}", w.reason);
-}
-
-#[test]
-fn a_ros2_bag_directory_replays_like_its_mcap_file() {
-    // `ros2 bag record -s mcap` writes a directory: metadata.yaml and the storage file.
-    let dir = tempfile::tempdir().unwrap();
-    let bag = dir.path().join("rosbag2_2026_12_02");
-    std::fs::create_dir(&bag).unwrap();
-    std::fs::copy(
-        testdata("sim-paper.mcap"),
-        bag.join("rosbag2_2026_12_02_0.mcap"),
-    )
-    .unwrap();
-    std::fs::write(
-        bag.join("metadata.yaml"),
-        "rosbag2_bagfile_information:\n  version: 9\n",
-    )
-    .unwrap();
-    let (from_dir, summary) = run(&bag, 0.5);
-    assert_eq!(from_dir, run(&testdata("sim-paper.mcap"), 0.5).0);
-    assert!(summary.lines.scans > 0);
 }

@@ -64,11 +64,12 @@ pub struct EvaluationReport {
     pub rpe: RpeSummary,
 }
 
-/// Reads a trajectory: a TUM text file, or a ROS 2 bag (`.mcap`) whose `topic` (default:
+/// Reads a trajectory: a TUM text file, or a ROS 2 bag (an MCAP or `.db3` file or a bag
+/// directory, [`crate::mcap_io::sniff::is_bag`]) whose `topic` (default:
 /// the first of [`POSE_TOPICS`] it has) carries `geometry_msgs/PoseWithCovarianceStamped`,
 /// `geometry_msgs/PoseStamped` or `nav_msgs/Odometry`; stamps are log times.
 pub fn load_trajectory(path: &Path, topic: Option<&str>) -> Result<Trajectory, EvaluateError> {
-    if path.extension().is_none_or(|e| e != "mcap") {
+    if !crate::mcap_io::sniff::is_bag(path) {
         return Ok(read_tum_file(path)?);
     }
     let bag = BagReader::open(path)?;

@@ -18,15 +18,40 @@ pub enum ReadError {
         #[source]
         source: std::io::Error,
     },
-    /// The path is not an MCAP bag: what it is instead, and what to do.
-    #[error("{path}: not an MCAP bag: {what}; {hint}", path = path.display())]
-    NotMcap {
+    /// The path is not a ROS 2 bag: what it is instead, and what to do.
+    #[error("{path}: not a ROS 2 bag (MCAP or sqlite3): {what}; {hint}", path = path.display())]
+    NotABag {
         /// The path given.
         path: PathBuf,
         /// What it is.
         what: String,
         /// What to do with it.
         hint: String,
+    },
+    /// A bag directory's `metadata.yaml` cannot be used.
+    #[error("{path}: {message}", path = path.display())]
+    Metadata {
+        /// The metadata file.
+        path: PathBuf,
+        /// What is wrong (for YAML errors, with line and column).
+        message: String,
+    },
+    /// SQLite failed on a `.db3` file (it is damaged, locked, or not rosbag2's schema).
+    #[error("{path}: sqlite3 bag: {source}", path = path.display())]
+    Sqlite {
+        /// The storage file.
+        path: PathBuf,
+        /// SQLite's error.
+        #[source]
+        source: Arc<rusqlite::Error>,
+    },
+    /// A row of a `.db3` file is not what rosbag2 writes.
+    #[error("{path}: sqlite3 bag: {what}", path = path.display())]
+    BadRow {
+        /// The storage file.
+        path: PathBuf,
+        /// What the row has, and what was expected.
+        what: String,
     },
     /// Reading the file failed.
     #[error("{path}: read error at byte {offset}: {source}", path = path.display())]
@@ -182,6 +207,15 @@ pub enum WriteError {
         /// The writer's error.
         #[source]
         source: mcap::McapError,
+    },
+    /// A bag directory's `metadata.yaml` could not be written.
+    #[error("{path}: writing the bag's metadata: {source}", path = path.display())]
+    Metadata {
+        /// The metadata file.
+        path: PathBuf,
+        /// The operating system's error.
+        #[source]
+        source: std::io::Error,
     },
     /// The file was written but could not be flushed to disk.
     #[error("{path}: flushing: {source}", path = path.display())]

@@ -1,5 +1,7 @@
-//! Reading and writing ROS 2 bags stored as MCAP (profile `ros2`, schemas `ros2msg`,
-//! messages `cdr`): what `ros2 bag record -s mcap` writes and Foxglove opens.
+//! Reading and writing ROS 2 bags: read in every form `ros2 bag record` writes (MCAP,
+//! sqlite3 `.db3`, a bag directory with `metadata.yaml` and one or several split files);
+//! written as MCAP (profile `ros2`, schemas `ros2msg`, messages `cdr`), the form Foxglove
+//! opens, as one file or as a bag directory with `metadata.yaml`.
 //!
 //! ```
 //! use ekf_cli::mcap_io::{BagReader, BagWriter};
@@ -28,11 +30,14 @@
 mod error;
 mod indexed;
 mod linear;
+mod mcap_file;
 mod message;
+pub mod metadata;
 pub mod reader;
 mod recover;
 pub mod sniff;
 mod source;
+mod sqlite;
 mod summary;
 pub mod writer;
 

@@ -1,99 +1,104 @@
-//! Opening a ROS 2 bag: its topics with types and counts, and a stream of its messages
-//! read incrementally from the file, so memory does not grow with the file.
+//! Opening a ROS 2 bag in any form `ros2 bag record` writes (an MCAP file, a sqlite3 `.db3`
+//! file, or a bag directory of one or several such files with `metadata.yaml`): its
+//! topics with types and counts, and one stream of its messages in log-time order, read
+//! incrementally from the files, so memory does not grow with the bag.
 
 use super::error::ReadError;
-use super::indexed::IndexedSource;
-use super::linear::LinearSource;
+use super::mcap_file::{McapFile, McapMessages, TopicCounts};
 use super::message::{BagMessage, TopicInfo};
-use super::recover::recover;
-use super::source::{Raw, SourceError};
-use super::summary;
-use mcap::Summary;
-use std::collections::BTreeMap;
-use std::fs::File;
+use super::sniff::{storage_files, Storage};
+use super::source::Raw;
+use super::sqlite::{Db3File, Db3Messages};
+use std::iter::Peekable;
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
 
 /// The order [`Messages`] delivers messages in.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum MessageOrder {
-    /// Non-decreasing log time, ties in file order. Used for every chunked file (all bags
-    /// `ros2 bag record` and [`super::BagWriter`] write): through the summary's chunk
-    /// indexes, or, when the summary is missing or damaged, through indexes rebuilt by
-    /// reading the file once at [`BagReader::open`].
+    /// Non-decreasing log time, ties in file order (and, across the files of a split bag,
+    /// in recording order). Used for every chunked MCAP file (all bags `ros2 bag record`
+    /// and [`super::BagWriter`] write): through the summary's chunk indexes, or, when the
+    /// summary is missing or damaged, through indexes rebuilt by reading the file once at
+    /// [`BagReader::open`]; and for sqlite3 files, through their timestamp index.
     LogTime,
-    /// The order of the records in the file, with no reordering. Used only for files with
-    /// messages outside chunks, which no chunk index reaches.
+    /// The order of the records in the file, with no reordering. Used only for MCAP files
+    /// with messages outside chunks, which no chunk index reaches.
     File,
 }
 
-/// An MCAP ROS 2 bag opened for reading.
+/// One storage file of a bag.
+#[derive(Debug)]
+enum Part {
+    Mcap(Box<McapFile>),
+    Sqlite(Db3File),
+}
+
+impl Part {
+    fn counts(&self) -> &TopicCounts {
+        match self {
+            Part::Mcap(f) => f.counts(),
+            Part::Sqlite(f) => f.counts(),
+        }
+    }
+
+    fn messages(&self) -> Result<PartMessages, ReadError> {
+        Ok(match self {
+            Part::Mcap(f) => PartMessages::Mcap(Box::new(f.messages()?)),
+            Part::Sqlite(f) => PartMessages::Sqlite(Box::new(f.messages()?)),
+        })
+    }
+}
+
+/// A ROS 2 bag opened for reading.
 #[derive(Debug)]
 pub struct BagReader {
-    path: Arc<Path>,
-    file_len: u64,
-    /// The file's summary, or one rebuilt by reading the file; `None` for unchunked files.
-    summary: Option<Summary>,
-    /// Where rebuilding the summary stopped early; reported after the last message.
-    damage: Option<SourceError>,
+    path: PathBuf,
+    parts: Vec<Part>,
     topics: Vec<TopicInfo>,
 }
 
 impl BagReader {
-    /// Opens `path` (an MCAP file, or a ROS 2 bag directory with one `.mcap` storage
-    /// file; a sqlite3 bag or a text file is named as such, [`super::sniff`]) and lists
-    /// its topics. Reads the summary; if the summary is missing or
-    /// damaged (a recording cut short), reads the whole file once to rebuild it, checking
-    /// every chunk. A damaged file still opens: its intact part can be read, and the
-    /// damage is reported after the last message. A damaged file without a single
-    /// channel (not MCAP at all, or cut inside its first chunk) is an error naming the
-    /// byte offset.
+    /// Opens the bag at `path` — an MCAP file, a `.db3` file, or a bag directory (or its
+    /// `metadata.yaml`) with one or several of them ([`super::sniff`]) — and lists its
+    /// topics. An MCAP file whose summary is missing or damaged (a recording cut short) is
+    /// read once to rebuild it; its intact part can then be read, and the damage is
+    /// reported after its last message. A path that is no bag, or a file without a single
+    /// readable channel, is an error naming the file and what it is.
     pub fn open(path: impl AsRef<Path>) -> Result<Self, ReadError> {
-        let path: Arc<Path> = Arc::from(super::sniff::mcap_file(path.as_ref())?.as_path());
-        let open_error = |source| ReadError::Open {
-            path: path.to_path_buf(),
-            source,
-        };
-        let mut file = File::open(&path).map_err(open_error)?;
-        let file_len = file.metadata().map_err(open_error)?.len();
-        let found =
-            summary::read_summary(&mut file, file_len).filter(|s| !s.chunk_indexes.is_empty());
-        let (summary, damage, unchunked) = match found {
-            Some(summary) => (summary, None, false),
-            None => {
-                let r = recover(&mut file);
-                // Damage and no channel at all: nothing of the file is readable (it is
-                // not an MCAP file, or was cut before its first chunk ended), so it does
-                // not open.
-                if let (Some(damage), true) = (&r.damage, r.summary.channels.is_empty()) {
-                    return Err(to_read_error(&path, 0, damage.clone()));
-                }
-                (r.summary, r.damage, r.unchunked)
-            }
-        };
-        // A rebuilt summary always has statistics; a file's own may lack them.
-        let topics = summary.stats.is_some().then(|| summary_topics(&summary));
-        let mut bag = Self {
+        let path = path.as_ref().to_path_buf();
+        let parts = storage_files(&path)?
+            .into_iter()
+            .map(|(file, storage)| match storage {
+                Storage::Mcap => McapFile::open(&file).map(|f| Part::Mcap(Box::new(f))),
+                Storage::Sqlite => Db3File::open(&file).map(Part::Sqlite),
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let mut counts = TopicCounts::new();
+        for (key, n) in parts.iter().flat_map(Part::counts) {
+            *counts.entry(key.clone()).or_default() += n;
+        }
+        let topics = counts
+            .into_iter()
+            .map(|((topic, type_name), message_count)| TopicInfo {
+                topic,
+                type_name,
+                message_count,
+            })
+            .collect();
+        Ok(Self {
             path,
-            file_len,
-            // Unchunked files stream front to back, which finds any damage by itself.
-            summary: (!unchunked).then_some(summary),
-            damage: damage.filter(|_| !unchunked),
-            topics: Vec::new(),
-        };
-        bag.topics = match topics {
-            Some(topics) => topics,
-            None => bag.count_topics()?,
-        };
-        Ok(bag)
+            parts,
+            topics,
+        })
     }
 
-    /// The file this bag was opened from.
+    /// The path the bag was opened from.
     pub fn path(&self) -> &Path {
         &self.path
     }
 
-    /// Topics sorted by name, each with its type and message count.
+    /// Topics sorted by name, each with its type and message count (summed over the
+    /// files of a split bag).
     pub fn topics(&self) -> &[TopicInfo] {
         &self.topics
     }
@@ -113,124 +118,56 @@ impl BagReader {
 
     /// The order [`Self::messages`] delivers messages in.
     pub fn order(&self) -> MessageOrder {
-        if self.summary.is_some() {
+        let in_time = |p: &Part| match p {
+            Part::Mcap(f) => f.in_log_time_order(),
+            Part::Sqlite(_) => true,
+        };
+        if self.parts.iter().all(in_time) {
             MessageOrder::LogTime
         } else {
             MessageOrder::File
         }
     }
 
-    /// A new stream over all messages, in [`Self::order`], reading the file incrementally.
+    /// A new stream over all messages, in [`Self::order`], reading the files
+    /// incrementally (one message ahead per file).
     pub fn messages(&self) -> Result<Messages, ReadError> {
-        let file = File::open(&self.path).map_err(|source| ReadError::Open {
-            path: self.path.to_path_buf(),
-            source,
-        })?;
-        let source = match &self.summary {
-            Some(summary) => {
-                let channels = summary::summary_channels(summary, &self.path);
-                let indexed = IndexedSource::new(file, self.file_len, summary, channels)
-                    .map_err(|e| to_read_error(&self.path, 0, e))?;
-                Source::Indexed(Box::new(indexed))
-            }
-            None => Source::Linear(Box::new(LinearSource::new(file, Arc::clone(&self.path)))),
-        };
+        let streams = self
+            .parts
+            .iter()
+            .map(|p| Ok((p.messages()?.peekable(), 0)))
+            .collect::<Result<Vec<_>, ReadError>>()?;
         Ok(Messages {
-            path: self.path.to_path_buf(),
-            source,
-            damage: self.damage.clone(),
+            streams,
             delivered: 0,
             done: false,
         })
     }
+}
 
-    /// Counts messages per topic by streaming the file up to its end or its damage.
-    fn count_topics(&self) -> Result<Vec<TopicInfo>, ReadError> {
-        let mut counts: BTreeMap<(String, String), u64> = BTreeMap::new();
-        for message in self.messages()? {
-            let Ok(message) = message else { break };
-            let key = (
-                message.channel.topic.clone(),
-                message.channel.type_name.clone(),
-            );
-            *counts.entry(key).or_default() += 1;
+/// The messages of one storage file.
+enum PartMessages {
+    Mcap(Box<McapMessages>),
+    Sqlite(Box<Db3Messages>),
+}
+
+impl Iterator for PartMessages {
+    type Item = Result<Raw, ReadError>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        match self {
+            PartMessages::Mcap(m) => m.next(),
+            PartMessages::Sqlite(m) => m.next(),
         }
-        Ok(into_topics(counts))
     }
 }
 
-/// Topics and counts from the summary's statistics (0 for channels they do not list).
-fn summary_topics(summary: &Summary) -> Vec<TopicInfo> {
-    let no_counts = BTreeMap::new();
-    let channel_counts = summary
-        .stats
-        .as_ref()
-        .map_or(&no_counts, |s| &s.channel_message_counts);
-    let mut counts: BTreeMap<(String, String), u64> = BTreeMap::new();
-    for (id, channel) in &summary.channels {
-        let type_name = channel
-            .schema
-            .as_ref()
-            .map(|s| s.name.clone())
-            .unwrap_or_default();
-        let count = channel_counts.get(id).copied().unwrap_or(0);
-        *counts
-            .entry((channel.topic.clone(), type_name))
-            .or_default() += count;
-    }
-    into_topics(counts)
-}
-
-/// Turns `(topic, type) → count` into a sorted topic list.
-fn into_topics(counts: BTreeMap<(String, String), u64>) -> Vec<TopicInfo> {
-    counts
-        .into_iter()
-        .map(|((topic, type_name), message_count)| TopicInfo {
-            topic,
-            type_name,
-            message_count,
-        })
-        .collect()
-}
-
-/// Adds the file and the number of delivered messages to a source's error.
-fn to_read_error(path: &Path, delivered: u64, e: SourceError) -> ReadError {
-    let path = path.to_path_buf();
-    match e {
-        SourceError::Mcap { offset, source } => ReadError::Corrupt {
-            path,
-            offset,
-            messages: delivered,
-            source,
-        },
-        SourceError::Io { offset, source } => ReadError::Io {
-            path,
-            offset,
-            source,
-        },
-        SourceError::UnknownChannel(channel_id) => ReadError::UnknownChannel {
-            path,
-            index: delivered,
-            channel_id,
-        },
-    }
-}
-
-/// Where [`Messages`] gets its messages.
-enum Source {
-    /// Through the chunk indexes.
-    Indexed(Box<IndexedSource>),
-    /// Front to back.
-    Linear(Box<LinearSource>),
-}
-
-/// The messages of a bag. Yields every message up to the end or the first damage; after an
-/// error it yields nothing more.
+/// The messages of a bag: the files' streams merged by log time. Yields every message up
+/// to the end or the first damage; after an error it yields nothing more.
 pub struct Messages {
-    path: PathBuf,
-    source: Source,
-    /// Damage found when the bag was opened, yielded after the last message.
-    damage: Option<SourceError>,
+    /// Each file's stream, with the log time of the last message it delivered (where its
+    /// error, if it has one, is placed in the merged order).
+    streams: Vec<(Peekable<PartMessages>, u64)>,
     delivered: u64,
     done: bool,
 }
@@ -242,26 +179,29 @@ impl Iterator for Messages {
         if self.done {
             return None;
         }
-        let next = match &mut self.source {
-            Source::Indexed(s) => s.next(),
-            Source::Linear(s) => s.next(),
-        };
-        match next {
-            None => {
+        // The stream whose next item comes first; ties go to the earlier file.
+        let (_, index) = self
+            .streams
+            .iter_mut()
+            .enumerate()
+            .filter_map(|(i, (stream, last))| match stream.peek()? {
+                Ok(raw) => Some((raw.log_time, i)),
+                Err(_) => Some((*last, i)),
+            })
+            .min()?;
+        let (stream, last) = &mut self.streams[index];
+        match stream.next()? {
+            Err(e) => {
                 self.done = true;
-                let damage = self.damage.take()?;
-                Some(Err(to_read_error(&self.path, self.delivered, damage)))
+                Some(Err(e))
             }
-            Some(Err(e)) => {
-                self.done = true;
-                Some(Err(to_read_error(&self.path, self.delivered, e)))
-            }
-            Some(Ok(Raw {
+            Ok(Raw {
                 channel,
                 log_time,
                 publish_time,
                 data,
-            })) => {
+            }) => {
+                *last = log_time;
                 let index = self.delivered;
                 self.delivered += 1;
                 Some(Ok(BagMessage {

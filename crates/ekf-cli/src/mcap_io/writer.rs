@@ -1,7 +1,10 @@
 //! Writing ROS 2 bags that Foxglove and the ROS 2 tools open: chunked, indexed, with a
-//! summary, one channel per (topic, type) registered on first use.
+//! summary, one channel per (topic, type) registered on first use; as one MCAP file, or
+//! as a bag directory (`NAME/NAME_0.mcap` with `NAME/metadata.yaml`) as `ros2 bag record`
+//! writes it.
 
 use super::error::WriteError;
+use super::metadata::{BagInfo, WrittenBag};
 use super::{MESSAGE_ENCODING, PROFILE, SCHEMA_ENCODING};
 use crate::ros2::{AnyMessage, CdrError, MsgDef, RosMessage, Stamped};
 use mcap::records::MessageHeader;
@@ -20,23 +23,51 @@ const NO_QOS_PROFILES: &str = "[]";
 /// dropped unfinished (say the caller returned early with an error), `Drop` finishes it
 /// best-effort, so the file is still a complete, readable MCAP.
 pub struct BagWriter {
+    /// The MCAP file.
     path: PathBuf,
+    /// The bag directory holding the file and its `metadata.yaml`, if writing one.
+    directory: Option<PathBuf>,
     /// `None` once finished.
     inner: Option<mcap::Writer<BufWriter<File>>>,
-    /// Channel id per (topic, type name).
-    channels: HashMap<(String, &'static str), u16>,
+    /// Channel id and index into `written.topics` per (topic, type name).
+    channels: HashMap<(String, &'static str), (u16, usize)>,
     /// Sequence number per channel.
     sequences: HashMap<u16, u32>,
+    /// What the metadata says: topics with counts, time span.
+    written: WrittenBag,
+}
+
+/// Whether `path` asks for a bag directory: it ends with a path separator, or is an
+/// existing directory.
+fn is_directory_request(path: &Path) -> bool {
+    let text = path.as_os_str().to_string_lossy();
+    text.ends_with('/') || text.ends_with(std::path::MAIN_SEPARATOR) || path.is_dir()
 }
 
 impl BagWriter {
-    /// Creates (or truncates) `path` and writes the MCAP header with profile `ros2`.
+    /// Creates (or truncates) `path` and writes the MCAP header with profile `ros2`. A
+    /// `path` that ends with `/` (or is a directory) is a bag directory, created if
+    /// needed, holding `NAME_0.mcap` (NAME: the directory's name) and a `metadata.yaml`
+    /// written at once and rewritten with the counts when the bag is finished.
     pub fn create(path: impl AsRef<Path>) -> Result<Self, WriteError> {
-        let path = path.as_ref().to_path_buf();
-        let file = File::create(&path).map_err(|source| WriteError::Create {
-            path: path.clone(),
+        let given = path.as_ref();
+        let create_error = |path: &Path, source| WriteError::Create {
+            path: path.to_path_buf(),
             source,
-        })?;
+        };
+        let (directory, path) = if is_directory_request(given) {
+            std::fs::create_dir_all(given).map_err(|e| create_error(given, e))?;
+            let name = given
+                .file_name()
+                .map_or("bag".into(), |n| n.to_string_lossy().into_owned());
+            (
+                Some(given.to_path_buf()),
+                given.join(format!("{name}_0.mcap")),
+            )
+        } else {
+            (None, given.to_path_buf())
+        };
+        let file = File::create(&path).map_err(|e| create_error(&path, e))?;
         let inner = mcap::WriteOptions::new()
             .profile(PROFILE)
             .create(BufWriter::new(file))
@@ -45,12 +76,35 @@ impl BagWriter {
                 topic: String::new(),
                 source,
             })?;
-        Ok(Self {
+        let file_name = path.file_name().map(|n| n.to_string_lossy().into_owned());
+        let writer = Self {
             path,
+            directory,
             inner: Some(inner),
             channels: HashMap::new(),
             sequences: HashMap::new(),
-        })
+            written: WrittenBag {
+                file_name: file_name.unwrap_or_default(),
+                ..WrittenBag::default()
+            },
+        };
+        // Written now too, so that a recording killed before it finishes is still a bag
+        // directory that readers recognise.
+        writer.write_bag_metadata()?;
+        Ok(writer)
+    }
+
+    /// Writes `metadata.yaml` with what has been written so far, if writing a directory.
+    fn write_bag_metadata(&self) -> Result<(), WriteError> {
+        let Some(dir) = &self.directory else {
+            return Ok(());
+        };
+        BagInfo::for_written(&self.written)
+            .write(dir)
+            .map_err(|source| WriteError::Metadata {
+                path: dir.join(super::metadata::METADATA_FILE),
+                source,
+            })
     }
 
     /// Writes `message` on `topic` with log time = publish time = its header stamp.
@@ -103,7 +157,11 @@ impl BagWriter {
             topic: topic.to_owned(),
             source,
         })?;
-        let channel_id = self.channel(topic, def)?;
+        let (channel_id, topic_index) = self.channel(topic, def)?;
+        self.written.topics[topic_index].2 += 1;
+        let (first, last) = self.written.span.get_or_insert((time_ns, time_ns));
+        *first = (*first).min(time_ns);
+        *last = (*last).max(time_ns);
         let sequence = self.sequences.entry(channel_id).or_insert(0);
         *sequence = sequence.wrapping_add(1);
         let header = MessageHeader {
@@ -146,10 +204,10 @@ impl BagWriter {
     }
 
     /// The channel for (`topic`, `def`), registering it and its schema on first use.
-    fn channel(&mut self, topic: &str, def: &'static MsgDef) -> Result<u16, WriteError> {
+    fn channel(&mut self, topic: &str, def: &'static MsgDef) -> Result<(u16, usize), WriteError> {
         let key = (topic.to_owned(), def.name);
-        if let Some(&id) = self.channels.get(&key) {
-            return Ok(id);
+        if let Some(&found) = self.channels.get(&key) {
+            return Ok(found);
         }
         let path = &self.path;
         let writer = self.inner.as_mut().ok_or_else(|| finished(path, topic))?;
@@ -160,8 +218,12 @@ impl BagWriter {
         let id = writer
             .add_channel(schema_id, topic, MESSAGE_ENCODING, &metadata)
             .map_err(|source| mcap_error(path, topic, source))?;
-        self.channels.insert(key, id);
-        Ok(id)
+        let index = self.written.topics.len();
+        self.written
+            .topics
+            .push((topic.to_owned(), def.name.to_owned(), 0));
+        self.channels.insert(key, (id, index));
+        Ok((id, index))
     }
 
     /// Finishes the MCAP and flushes, once; later calls do nothing.
@@ -179,7 +241,8 @@ impl BagWriter {
             .map_err(|source| WriteError::Flush {
                 path: self.path.clone(),
                 source,
-            })
+            })?;
+        self.write_bag_metadata()
     }
 }
 
