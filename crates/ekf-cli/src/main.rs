@@ -5,7 +5,7 @@
 use clap::ValueEnum;
 use clap::{Parser, Subcommand};
 use ekf_cli::commands::{
-    self, compare, corpus, emulate, evaluate, experiment, import, map, simulate,
+    self, compare, corpus, emulate, evaluate, experiment, figures, import, map, simulate,
 };
 use ekf_cli::config::{Config, DEFAULT_TOML};
 use ekf_cli::emulate::Device;
@@ -55,6 +55,11 @@ enum Command {
         /// Write the trajectory as TUM text (what evo reads).
         #[arg(long)]
         tum: Option<PathBuf>,
+        /// Draw the trajectory over the map with the reference, the error over time and
+        /// markers where lines were refused, the compass rejected, the filter lost or
+        /// relocalized, as one SVG.
+        #[arg(long)]
+        svg: Option<PathBuf>,
         /// Print the summary as one JSON object.
         #[arg(long)]
         json: bool,
@@ -254,6 +259,10 @@ enum Command {
         /// Align the estimate to the reference first (rigid SE(2) Umeyama, as `evo -a`).
         #[arg(long)]
         align: bool,
+        /// Draw both trajectories and the position and heading errors over time as one
+        /// SVG (as `evo_ape --plot`).
+        #[arg(long)]
+        svg: Option<PathBuf>,
         /// Print one JSON object instead of a table.
         #[arg(long)]
         json: bool,
@@ -368,6 +377,14 @@ impl From<CliMode> for Mode {
             CliMode::LaserCompass => Mode::LaserCompass,
         }
     }
+}
+
+/// The file name of `path`, for figure titles.
+fn file_name(path: &std::path::Path) -> String {
+    path.file_name()
+        .unwrap_or(path.as_os_str())
+        .to_string_lossy()
+        .into_owned()
 }
 
 /// Creates the folder an output file goes into, so `--out results/run.mcap` just works.
@@ -785,10 +802,11 @@ fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
             global,
             out,
             tum,
+            svg,
             json,
         } => {
             let config = load_config(config.as_deref())?;
-            for path in [&out, &tum].into_iter().flatten() {
+            for path in [&out, &tum, &svg].into_iter().flatten() {
                 create_parent(path)?;
             }
             let options = ReplayOptions {
@@ -797,7 +815,7 @@ fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
                 init_from_truth,
                 out_mcap: out,
                 tum,
-                keep_trajectories: false,
+                keep_trajectories: svg.is_some(),
                 global,
             };
             let bar = progress_bar();
@@ -815,6 +833,15 @@ fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
                 println!("{}", serde_json::to_string_pretty(&outcome.summary)?);
             } else {
                 print_replay_table(&outcome.summary);
+            }
+            if let Some(path) = &svg {
+                let title = format!(
+                    "{}: ekf replay --mode {}",
+                    file_name(&log),
+                    options.mode.name()
+                );
+                let map = (!outcome.map.is_empty()).then_some(&outcome.map);
+                figures::write_svg_file(path, |w| figures::replay_svg(&outcome, map, &title, w))?;
             }
             if let Some(failure) = outcome.failure {
                 return Err(failure.into());
@@ -918,6 +945,7 @@ fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
             est_topic,
             truth_topic,
             align,
+            svg,
             json,
         } => {
             let est = evaluate::load_trajectory(&estimate, est_topic.as_deref())?;
@@ -927,6 +955,13 @@ fn run(cli: Cli) -> Result<(), Box<dyn std::error::Error>> {
                 println!("{}", serde_json::to_string_pretty(&report)?);
             } else {
                 print!("{}", report.to_table());
+            }
+            if let Some(path) = &svg {
+                create_parent(path)?;
+                let title = format!("{} against {}", file_name(&estimate), file_name(&truth));
+                figures::write_svg_file(path, |w| {
+                    figures::evaluation_svg(&est, &reference, align, &title, w)
+                })?;
             }
         }
     }

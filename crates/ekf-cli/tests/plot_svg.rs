@@ -151,16 +151,19 @@ fn panels_on_a_grid_in_one_svg() {
             }),
             estimates: &estimates,
             walls: &[[[-1.0, -1.0], [6.0, -1.0]], [[6.0, -1.0], [6.0, 4.0]]],
+            markers: &[],
         },
         Panel::ErrorsOverTime {
             title: "",
             series: &series,
             y_desc: "e [m]",
+            markers: &[],
         },
         Panel::ErrorsOverTime {
             title: "third",
             series: &series,
             y_desc: "e [m]",
+            markers: &[],
         },
     ];
     let mut svg = Vec::new();
@@ -196,6 +199,7 @@ fn empty_panels_and_small_cells_are_errors() {
         title: "",
         series: &empty,
         y_desc: "",
+        markers: &[],
     };
     assert!(matches!(
         plot_figure(Vec::new(), &[panel], 1, &options),
@@ -210,6 +214,7 @@ fn empty_panels_and_small_cells_are_errors() {
         title: "",
         series: &some,
         y_desc: "",
+        markers: &[],
     };
     // 900 px across is enough for one chart, not for ten side by side.
     plot_figure(Vec::new(), &[panel], 1, &options).unwrap();

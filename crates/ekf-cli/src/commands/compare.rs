@@ -8,10 +8,11 @@
 //! compass topic) is reported as not available, with the reason; the others still run.
 //! A log without a reference topic is an error: there is nothing to compare against.
 
+use crate::commands::figures::walls_of;
 use crate::config::Config;
 use crate::eval::{ape, ApeOptions, PoseError};
 use crate::mcap_io::{BagReader, ReadError};
-use crate::plot::{plot_figure, Panel, PlotError, PlotOptions, TimeSeries, TrajectorySeries};
+use crate::plot::{plot_figure, Panel, PlotError, PlotOptions, TimeSeries, TrajectorySeries, Wall};
 use crate::replay::{replay, Mode, ReplayOptions};
 use crate::trajectory::Trajectory;
 use serde::Serialize;
@@ -142,6 +143,10 @@ pub struct Comparison {
     /// The reference trajectory, for the plots.
     #[serde(skip)]
     pub reference: Trajectory,
+    /// The walls of the map the laser modes used (the given map, or the first laser
+    /// mode's first-scan map), for the plots.
+    #[serde(skip)]
+    pub walls: Vec<Wall>,
 }
 
 impl Comparison {
@@ -237,6 +242,7 @@ pub fn compare(
             .map_or_else(|| "first scan".into(), |p| p.display().to_string()),
         modes: Vec::with_capacity(Mode::ALL.len()),
         reference: Trajectory::default(),
+        walls: Vec::new(),
     };
     for mode in Mode::ALL {
         let replay_options = ReplayOptions {
@@ -255,6 +261,9 @@ pub fn compare(
             Ok(out) => {
                 if comparison.reference.len() < out.reference.len() {
                     comparison.reference = out.reference.clone();
+                }
+                if comparison.walls.is_empty() {
+                    comparison.walls = walls_of(&out.map.segments);
                 }
                 evaluate_run(out, &comparison.reference_topic)
             }
@@ -310,7 +319,7 @@ fn evaluate_run(out: crate::replay::ReplayOutcome, reference_topic: &str) -> Mod
 pub const FIGURE_SIZE: (u32, u32) = (1500, 1150);
 
 /// Draws the comparison as one SVG figure of four charts and writes it to `writer`: the
-/// estimated trajectories with the reference in the x–y plane (the paper's Fig. 9), the
+/// estimated trajectories with the reference over the map's walls (the paper's Fig. 9), the
 /// position error over time, and the x and y errors over time (the paper's Fig. 10), one
 /// line per mode that ran, named by the mode (the reference is named `reference`).
 ///
@@ -350,22 +359,26 @@ pub fn render_svg<W: Write>(comparison: &Comparison, writer: W) -> Result<(), Pl
                 trajectory: &comparison.reference,
             }),
             estimates: &estimates,
-            walls: &[],
+            walls: &comparison.walls,
+            markers: &[],
         },
         Panel::ErrorsOverTime {
             title: "Position error",
             series: &position,
             y_desc: "position error [m]",
+            markers: &[],
         },
         Panel::ErrorsOverTime {
             title: "Deviation in X (Fig. 10)",
             series: &dx,
             y_desc: "x estimated - x real [m]",
+            markers: &[],
         },
         Panel::ErrorsOverTime {
             title: "Deviation in Y (Fig. 10)",
             series: &dy,
             y_desc: "y estimated - y real [m]",
+            markers: &[],
         },
     ];
     let log = Path::new(&comparison.log);

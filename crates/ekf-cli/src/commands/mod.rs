@@ -6,6 +6,7 @@ pub mod corpus;
 pub mod emulate;
 pub mod evaluate;
 pub mod experiment;
+pub mod figures;
 pub mod import;
 pub mod map;
 pub mod simulate;

@@ -1,11 +1,12 @@
-//! What both plots share: the colours, the chart frame sizes, and data ranges that
-//! include every finite point.
+//! What the plots share: the colours and line widths, the chart frame sizes, data ranges
+//! that include every finite point, markers, and the legend drawn above each chart.
 
-use super::{PlotError, PlotOptions};
+use super::{MarkerShape, PlotError, PlotOptions};
 use plotters::coord::ranged1d::ValueFormatter;
 use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 use std::io::Write;
 use std::ops::Range;
 
@@ -133,50 +134,167 @@ fn tick_label(value: &f64) -> String {
     }
 }
 
-/// Draws one named series as a single line (one SVG `<polyline>`) with a legend entry;
-/// non-finite points are skipped.
+/// A series' stroke width (px) when it is the `index`-th of `count` drawn in order: the
+/// last 2 px, each earlier one 1 px wider (up to 5 px), so that a series drawn over an
+/// equal one leaves it showing on both sides.
+pub(super) fn layered_width(index: usize, count: usize) -> u32 {
+    let above = count.saturating_sub(index + 1);
+    2 + u32::try_from(above.min(3)).unwrap_or(3)
+}
+
+/// What a legend entry shows.
+#[derive(Debug, Clone, Copy)]
+pub(super) enum Glyph {
+    /// A line of this colour and width.
+    Line(RGBColor, u32),
+    /// A marker.
+    Marker(RGBColor, MarkerShape),
+}
+
+/// One legend entry.
+#[derive(Debug, Clone)]
+pub(super) struct LegendEntry {
+    /// The name shown.
+    pub name: String,
+    /// What is drawn before it.
+    pub glyph: Glyph,
+}
+
+/// Size of a marker (px).
+const MARKER_SIZE: i32 = 6;
+
+/// Draws one series as a single line (one SVG `<polyline>`); non-finite points are
+/// skipped.
 pub(super) fn draw_series(
     chart: &mut Chart<'_, '_>,
-    name: &str,
     points: impl Iterator<Item = (f64, f64)>,
     colour: RGBColor,
+    width: u32,
 ) -> Result<(), PlotError> {
     let finite = points.filter(|(x, y)| x.is_finite() && y.is_finite());
-    chart
-        .draw_series(LineSeries::new(finite, colour.stroke_width(2)))?
-        .label(name)
-        .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 16, y + 5)], colour.filled()));
+    chart.draw_series(LineSeries::new(finite, colour.stroke_width(width)))?;
     Ok(())
 }
 
-/// Draws `walls` as thick grey segments, with one legend entry `walls` (none if empty).
-pub(super) fn draw_walls(
+/// Draws a marker of `shape` at each finite point.
+pub(super) fn draw_markers(
     chart: &mut Chart<'_, '_>,
-    walls: &[super::Wall],
+    points: impl Iterator<Item = (f64, f64)>,
+    colour: RGBColor,
+    shape: MarkerShape,
 ) -> Result<(), PlotError> {
-    let grey = RGBColor(150, 150, 150);
-    for (i, w) in walls.iter().enumerate() {
-        let ends = w.iter().map(|p| (p[0], p[1]));
-        let series = chart.draw_series(LineSeries::new(ends, grey.stroke_width(4)))?;
-        if i == 0 {
-            series
-                .label("walls")
-                .legend(move |(x, y)| Rectangle::new([(x, y - 2), (x + 16, y + 2)], grey.filled()));
+    let finite: Vec<(f64, f64)> = points
+        .filter(|(x, y)| x.is_finite() && y.is_finite())
+        .collect();
+    let style = colour.stroke_width(2);
+    match shape {
+        MarkerShape::Cross => {
+            chart.draw_series(finite.iter().map(|&p| Cross::new(p, MARKER_SIZE, style)))?;
+        }
+        MarkerShape::Circle => {
+            chart.draw_series(finite.iter().map(|&p| Circle::new(p, MARKER_SIZE, style)))?;
+        }
+        MarkerShape::Triangle => {
+            chart.draw_series(
+                finite
+                    .iter()
+                    .map(|&p| TriangleMarker::new(p, MARKER_SIZE, style)),
+            )?;
+        }
+        MarkerShape::Dot => {
+            chart.draw_series(finite.iter().map(|&p| Circle::new(p, 2, colour.filled())))?;
         }
     }
     Ok(())
 }
 
-/// Draws the legend box in the upper-left corner of the chart.
-pub(super) fn draw_legend<'a, 'b: 'a>(chart: &mut Chart<'a, 'b>) -> Result<(), PlotError> {
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperLeft)
-        .label_font(("sans-serif", LABEL_SIZE))
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .draw()?;
+/// Colour of walls.
+pub(super) const WALL_GREY: RGBColor = RGBColor(150, 150, 150);
+
+/// Draws `walls` as thick grey segments.
+pub(super) fn draw_walls(
+    chart: &mut Chart<'_, '_>,
+    walls: &[super::Wall],
+) -> Result<(), PlotError> {
+    for w in walls {
+        let ends = w.iter().map(|p| (p[0], p[1]));
+        chart.draw_series(LineSeries::new(ends, WALL_GREY.stroke_width(4)))?;
+    }
     Ok(())
+}
+
+/// Height of one row of legend entries (px).
+const LEGEND_ROW: u32 = LABEL_SIZE + 10;
+
+/// Width of an entry's glyph and the gaps around it (px).
+const LEGEND_GLYPH: u32 = 24;
+
+/// Draws `entries` in rows across the top of `area`, above the chart (so that the legend
+/// never covers data), and returns the area left below it for the chart.
+pub(super) fn with_legend<'b>(
+    area: &DrawingArea<SVGBackend<'b>, Shift>,
+    entries: &[LegendEntry],
+) -> Result<DrawingArea<SVGBackend<'b>, Shift>, PlotError> {
+    if entries.is_empty() {
+        return Ok(area.clone());
+    }
+    let font = ("sans-serif", LABEL_SIZE).into_font();
+    let measured = font.clone().color(&BLACK);
+    let (width, _) = area.dim_in_pixel();
+    let usable = width.saturating_sub(2 * MARGIN + Y_LABEL_AREA).max(1);
+    // Lay the entries out left to right, wrapping into new rows.
+    let mut placed = Vec::with_capacity(entries.len());
+    let (mut x, mut row) = (0u32, 0u32);
+    for e in entries {
+        let text_width = area
+            .estimate_text_size(&e.name, &measured)
+            .map_or(10 * e.name.len() as u32, |(w, _)| w);
+        let needed = LEGEND_GLYPH + 6 + text_width + 18;
+        if x > 0 && x + needed > usable {
+            x = 0;
+            row += 1;
+        }
+        placed.push((x, row, e));
+        x += needed;
+    }
+    let height = (row + 1) * LEGEND_ROW + 6;
+    let (strip, rest) = area.split_vertically(height);
+    let left = i32::try_from(MARGIN + Y_LABEL_AREA).unwrap_or(0);
+    for (x, row, e) in placed {
+        let x0 = left + i32::try_from(x).unwrap_or(0);
+        let y_mid = i32::try_from(row * LEGEND_ROW + LEGEND_ROW / 2 + 4).unwrap_or(0);
+        let glyph_end = x0 + LEGEND_GLYPH as i32;
+        match e.glyph {
+            Glyph::Line(colour, width) => {
+                strip.draw(&PathElement::new(
+                    vec![(x0, y_mid), (glyph_end, y_mid)],
+                    colour.stroke_width(width),
+                ))?;
+            }
+            Glyph::Marker(colour, shape) => {
+                let centre = (x0 + LEGEND_GLYPH as i32 / 2, y_mid);
+                let style = colour.stroke_width(2);
+                match shape {
+                    MarkerShape::Cross => strip.draw(&Cross::new(centre, MARKER_SIZE, style))?,
+                    MarkerShape::Circle => strip.draw(&Circle::new(centre, MARKER_SIZE, style))?,
+                    MarkerShape::Triangle => {
+                        strip.draw(&TriangleMarker::new(centre, MARKER_SIZE, style))?
+                    }
+                    MarkerShape::Dot => strip.draw(&Circle::new(centre, 3, colour.filled()))?,
+                }
+            }
+        }
+        let text_style = font
+            .clone()
+            .color(&BLACK)
+            .pos(Pos::new(HPos::Left, VPos::Center));
+        strip.draw(&Text::new(
+            e.name.clone(),
+            (glyph_end + 6, y_mid),
+            text_style,
+        ))?;
+    }
+    Ok(rest)
 }
 
 /// Renders an SVG image of `options`' size with `draw` (which gets the area below the

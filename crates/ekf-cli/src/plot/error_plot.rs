@@ -1,10 +1,15 @@
 //! Errors over time: several named series (e.g. the position error of each estimate, or
 //! its x and y error as the paper's Fig. 10) against time.
 
-use super::axes::{build_chart, colour, draw_legend, draw_series, padded_range, render};
-use super::{PlotError, PlotOptions};
+use super::axes::{
+    build_chart, colour, draw_markers, draw_series, layered_width, padded_range, render,
+    with_legend, Glyph, LegendEntry,
+};
+use super::trajectory_plot::marker_entry;
+use super::{Markers, PlotError, PlotOptions};
 use plotters::coord::Shift;
 use plotters::prelude::{DrawingArea, SVGBackend};
+use plotters::style::RGBColor;
 use std::io::Write;
 use std::ops::Range;
 
@@ -33,7 +38,7 @@ pub fn plot_errors_over_time<W: Write>(
 ) -> Result<(), PlotError> {
     let ranges = time_ranges(series)?;
     render(writer, options, |area| {
-        draw_errors(area, &ranges, series, y_desc)
+        draw_errors(area, &ranges, series, &[], y_desc)
     })
 }
 
@@ -61,20 +66,39 @@ pub(super) fn time_ranges(series: &[TimeSeries<'_>]) -> Result<TimeRanges, PlotE
     Ok(TimeRanges { t0, x, y })
 }
 
-/// Draws the error chart on `area` (ranges from [`time_ranges`]).
+/// Draws the error chart on `area` (ranges from [`time_ranges`]) with the legend above
+/// it: the series in order, each narrower than the one before so that none hides
+/// another, then the markers.
 pub(super) fn draw_errors(
     area: &DrawingArea<SVGBackend<'_>, Shift>,
     ranges: &TimeRanges,
     series: &[TimeSeries<'_>],
+    markers: &[Markers<'_, (u64, f64)>],
     y_desc: &str,
 ) -> Result<(), PlotError> {
     let t0 = ranges.t0;
-    let seconds = |t: u64| (t - t0) as f64 * 1e-9;
+    let seconds = |t: u64| t.saturating_sub(t0) as f64 * 1e-9;
+    let n = series.len();
+    let mut legend: Vec<LegendEntry> = series
+        .iter()
+        .enumerate()
+        .map(|(i, s)| LegendEntry {
+            name: s.name.into(),
+            glyph: Glyph::Line(colour(i), layered_width(i, n)),
+        })
+        .collect();
+    legend.extend(markers.iter().map(marker_entry));
+    let area = with_legend(area, &legend)?;
     let (x, y) = (ranges.x.clone(), ranges.y.clone());
-    let mut chart = build_chart(area, "time [s]", y_desc, |_| (x, y))?;
+    let mut chart = build_chart(&area, "time [s]", y_desc, |_| (x, y))?;
     for (i, s) in series.iter().enumerate() {
         let points = s.points.iter().map(|&(t, v)| (seconds(t), v));
-        draw_series(&mut chart, s.name, points, colour(i))?;
+        draw_series(&mut chart, points, colour(i), layered_width(i, n))?;
     }
-    draw_legend(&mut chart)
+    for m in markers {
+        let (r, g, b) = m.colour;
+        let points = m.points.iter().map(|&(t, v)| (seconds(t), v));
+        draw_markers(&mut chart, points, RGBColor(r, g, b), m.shape)?;
+    }
+    Ok(())
 }

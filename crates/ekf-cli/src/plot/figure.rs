@@ -4,7 +4,7 @@
 use super::axes::{render, LABEL_SIZE, MIN_SIZE};
 use super::error_plot::{draw_errors, time_ranges, TimeRanges};
 use super::trajectory_plot::{draw_trajectories, trajectory_ranges};
-use super::{PlotError, PlotOptions, TimeSeries, TrajectorySeries, Wall};
+use super::{Markers, PlotError, PlotOptions, TimeSeries, TrajectorySeries, Wall};
 use std::io::Write;
 use std::ops::Range;
 
@@ -23,6 +23,8 @@ pub enum Panel<'a> {
         /// Walls drawn in grey under the trajectories (legend entry `walls`), e.g. a
         /// line map; may be empty.
         walls: &'a [Wall],
+        /// Event markers over the trajectories; may be empty.
+        markers: &'a [Markers<'a, (f64, f64)>],
     },
     /// As [`super::plot_errors_over_time`]: values against time (s since the panel's
     /// earliest stamp).
@@ -33,6 +35,8 @@ pub enum Panel<'a> {
         series: &'a [TimeSeries<'a>],
         /// Description of the value axis.
         y_desc: &'a str,
+        /// Event markers over the series; may be empty.
+        markers: &'a [Markers<'a, (u64, f64)>],
     },
 }
 
@@ -43,11 +47,13 @@ enum Prepared<'p, 'a> {
         reference: Option<&'p TrajectorySeries<'a>>,
         estimates: &'a [TrajectorySeries<'a>],
         walls: &'a [Wall],
+        markers: &'a [Markers<'a, (f64, f64)>],
     },
     Errors {
         ranges: TimeRanges,
         series: &'a [TimeSeries<'a>],
         y_desc: &'a str,
+        markers: &'a [Markers<'a, (u64, f64)>],
     },
 }
 
@@ -78,17 +84,25 @@ pub fn plot_figure<W: Write>(
                     reference,
                     estimates,
                     walls,
+                    markers,
                     ..
                 } => Ok(Prepared::Trajectories {
                     ranges: trajectory_ranges(reference.as_ref(), estimates, walls)?,
                     reference: reference.as_ref(),
                     estimates,
                     walls,
+                    markers,
                 }),
-                Panel::ErrorsOverTime { series, y_desc, .. } => Ok(Prepared::Errors {
+                Panel::ErrorsOverTime {
+                    series,
+                    y_desc,
+                    markers,
+                    ..
+                } => Ok(Prepared::Errors {
                     ranges: time_ranges(series)?,
                     series,
                     y_desc,
+                    markers,
                 }),
             }
         })
@@ -123,12 +137,14 @@ pub fn plot_figure<W: Write>(
                     reference,
                     estimates,
                     walls,
-                } => draw_trajectories(area, ranges, reference, estimates, walls)?,
+                    markers,
+                } => draw_trajectories(area, ranges, reference, estimates, walls, markers)?,
                 Prepared::Errors {
                     ranges,
                     series,
                     y_desc,
-                } => draw_errors(area, &ranges, series, y_desc)?,
+                    markers,
+                } => draw_errors(area, &ranges, series, markers, y_desc)?,
             }
         }
         Ok(())

@@ -12,6 +12,33 @@ pub use error_plot::{plot_errors_over_time, TimeSeries};
 pub use figure::{plot_figure, Panel};
 pub use trajectory_plot::{plot_trajectories, TrajectorySeries, Wall};
 
+/// The shape of an event marker.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MarkerShape {
+    /// ×
+    Cross,
+    /// ○
+    Circle,
+    /// △
+    Triangle,
+    /// A small filled dot.
+    Dot,
+}
+
+/// Named event markers drawn over a chart's lines: `P` is `(x, y)` in metres on a
+/// trajectory chart, `(stamp in ns, value)` on a chart over time.
+#[derive(Debug, Clone, Copy)]
+pub struct Markers<'a, P> {
+    /// Legend name.
+    pub name: &'a str,
+    /// Where the markers go.
+    pub points: &'a [P],
+    /// Their shape.
+    pub shape: MarkerShape,
+    /// Their colour, `(r, g, b)`.
+    pub colour: (u8, u8, u8),
+}
+
 /// Size and title of a plot.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct PlotOptions {

@@ -2,12 +2,14 @@
 //! scales on both axes and a legend.
 
 use super::axes::{
-    build_chart, colour, draw_legend, draw_series, draw_walls, equal_aspect, padded_range, render,
+    build_chart, colour, draw_markers, draw_series, draw_walls, equal_aspect, layered_width,
+    padded_range, render, with_legend, Glyph, LegendEntry, WALL_GREY,
 };
-use super::{PlotError, PlotOptions};
+use super::{Markers, PlotError, PlotOptions};
 use crate::trajectory::Trajectory;
 use plotters::coord::Shift;
 use plotters::prelude::{DrawingArea, SVGBackend};
+use plotters::style::RGBColor;
 use plotters::style::BLACK;
 use std::io::Write;
 use std::ops::Range;
@@ -39,7 +41,7 @@ pub fn plot_trajectories<W: Write>(
 ) -> Result<(), PlotError> {
     let ranges = trajectory_ranges(reference.as_ref(), estimates, &[])?;
     render(writer, options, |area| {
-        draw_trajectories(area, ranges, reference.as_ref(), estimates, &[])
+        draw_trajectories(area, ranges, reference.as_ref(), estimates, &[], &[])
     })
 }
 
@@ -61,15 +63,41 @@ pub(super) fn trajectory_ranges(
     Ok((x, y))
 }
 
-/// Draws the trajectory chart on `area` (ranges from [`trajectory_ranges`]).
+/// Draws the trajectory chart on `area` (ranges from [`trajectory_ranges`]), with the
+/// legend above it: the walls under everything; the estimates in order, each narrower
+/// than the one before so that none hides another; the reference on top as a thin black
+/// line; the markers over all.
 pub(super) fn draw_trajectories(
     area: &DrawingArea<SVGBackend<'_>, Shift>,
     (x, y): (Range<f64>, Range<f64>),
     reference: Option<&TrajectorySeries<'_>>,
     estimates: &[TrajectorySeries<'_>],
     walls: &[Wall],
+    markers: &[Markers<'_, (f64, f64)>],
 ) -> Result<(), PlotError> {
-    let mut chart = build_chart(area, "x [m]", "y [m]", |size| equal_aspect(x, y, size))?;
+    let n = estimates.len();
+    let mut legend = Vec::new();
+    if !walls.is_empty() {
+        legend.push(LegendEntry {
+            name: "walls".into(),
+            glyph: Glyph::Line(WALL_GREY, 4),
+        });
+    }
+    if let Some(r) = reference {
+        legend.push(LegendEntry {
+            name: r.name.into(),
+            glyph: Glyph::Line(BLACK, 1),
+        });
+    }
+    for (i, e) in estimates.iter().enumerate() {
+        legend.push(LegendEntry {
+            name: e.name.into(),
+            glyph: Glyph::Line(colour(i), layered_width(i, n)),
+        });
+    }
+    legend.extend(markers.iter().map(marker_entry));
+    let area = with_legend(area, &legend)?;
+    let mut chart = build_chart(&area, "x [m]", "y [m]", |size| equal_aspect(x, y, size))?;
     draw_walls(&mut chart, walls)?;
     let xy = |s: &TrajectorySeries<'_>| {
         s.trajectory
@@ -77,11 +105,34 @@ pub(super) fn draw_trajectories(
             .map(|p| (p.pose.x, p.pose.y))
             .collect::<Vec<_>>()
     };
-    if let Some(r) = reference {
-        draw_series(&mut chart, r.name, xy(r).into_iter(), BLACK)?;
-    }
     for (i, e) in estimates.iter().enumerate() {
-        draw_series(&mut chart, e.name, xy(e).into_iter(), colour(i))?;
+        draw_series(
+            &mut chart,
+            xy(e).into_iter(),
+            colour(i),
+            layered_width(i, n),
+        )?;
     }
-    draw_legend(&mut chart)
+    if let Some(r) = reference {
+        draw_series(&mut chart, xy(r).into_iter(), BLACK, 1)?;
+    }
+    for m in markers {
+        let (r, g, b) = m.colour;
+        draw_markers(
+            &mut chart,
+            m.points.iter().copied(),
+            RGBColor(r, g, b),
+            m.shape,
+        )?;
+    }
+    Ok(())
+}
+
+/// The legend entry of a marker set.
+pub(super) fn marker_entry<P>(m: &Markers<'_, P>) -> LegendEntry {
+    let (r, g, b) = m.colour;
+    LegendEntry {
+        name: m.name.into(),
+        glyph: Glyph::Marker(RGBColor(r, g, b), m.shape),
+    }
 }

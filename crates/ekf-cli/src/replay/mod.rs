@@ -12,6 +12,7 @@
 
 pub mod accuracy;
 pub mod consistency;
+pub mod events;
 pub mod inputs;
 pub mod outputs;
 pub mod reorder;
@@ -28,6 +29,7 @@ use crate::ros2::{type_name_matches, AnyMessage};
 use crate::trajectory::{StampedPose, Trajectory};
 use ekf_core::ChiSquareGate;
 use ekf_core::{Motion, Pose2, WheelSpeeds};
+pub use events::ReplayEvent;
 use inputs::{
     gps_position, heading_from_imu, heading_from_magnetic_field, mount_from_tf, pose2,
     OdometryTracker, Skip, WheelTracker,
@@ -214,6 +216,11 @@ pub struct ReplayOutcome {
     pub reference: Trajectory,
     /// Log times (ns) of the scans that ended with the filter lost (empty unless kept).
     pub lost_scans_ns: Vec<u64>,
+    /// What the picture marks, each at its stamp (ns), in order (empty unless kept).
+    pub events: Vec<(u64, ReplayEvent)>,
+    /// The map at the end: the given one, or the one built from the first scan (empty
+    /// without the laser).
+    pub map: LineMap,
     /// Set when the log broke off (damage, a decode failure): everything before it was
     /// processed and the outputs are finished.
     pub failure: Option<ReplayError>,
@@ -640,8 +647,8 @@ pub(crate) struct Run<'a> {
     map_written: bool,
     gps_gate: ChiSquareGate<f64>,
     tracking: tracking::Tracking,
-    /// Stamps of the scans that ended with the filter lost, if trajectories are kept.
-    lost_scans: Option<Vec<u64>>,
+    /// Events and lost scans, if trajectories are kept.
+    events: Option<events::EventLog>,
     consistency: consistency::ConsistencyMonitor,
 }
 
@@ -734,7 +741,7 @@ impl<'a> Run<'a> {
             } else {
                 tracking::Tracking::new(options.map.is_some())
             },
-            lost_scans: options.keep_trajectories.then(Vec::new),
+            events: options.keep_trajectories.then(events::EventLog::default),
             consistency: consistency::ConsistencyMonitor::default(),
             gps_gate: ChiSquareGate::from_probability(config.gps.gate_probability, 2).map_err(
                 |error| LocalizerError::Config {
@@ -771,15 +778,17 @@ impl<'a> Run<'a> {
             localizer,
             mut summary,
             tracking,
-            lost_scans,
+            events,
             ..
         } = self;
+        let events = events.unwrap_or_default();
         summary.tracking.lost_at_end = tracking.lost_for;
         // Finish both outputs, then report the first error.
         let bag_finished = out.map_or(Ok(()), OutputBag::finish);
         let poses = poses.finish()?;
         bag_finished?;
         summary.map_segments = localizer.map().len();
+        let map = localizer.map().clone();
         let [ext, mat, upd] = &timer.stages;
         summary.timings = summary::Timings {
             extraction: ext.timing(),
@@ -804,7 +813,9 @@ impl<'a> Run<'a> {
             trajectory: kept.estimate,
             covariances: kept.covariances,
             reference: kept.reference,
-            lost_scans_ns: lost_scans.unwrap_or_default(),
+            lost_scans_ns: events.lost_scans,
+            events: events.events,
+            map,
             failure,
         })
     }
@@ -994,6 +1005,7 @@ impl<'a> Run<'a> {
             counts.recovered += u64::from(update.recovered);
         } else {
             counts.rejected += 1;
+            self.mark(now, ReplayEvent::CompassRejected);
         }
         if let Some(out) = self.out.as_mut() {
             let (level, text) = match (update.outcome.accepted, update.recovered) {
@@ -1086,8 +1098,8 @@ impl<'a> Run<'a> {
             let report = self.check_tracking(&scan, now, gap, report)?;
             if self.tracking.lost_for > 0 {
                 self.summary.tracking.scans_lost += 1;
-                if let Some(lost) = self.lost_scans.as_mut() {
-                    lost.push(now);
+                if let Some(log) = self.events.as_mut() {
+                    log.lost_scans.push(now);
                 }
             }
             self.check_consistency(now)?;
@@ -1098,6 +1110,9 @@ impl<'a> Run<'a> {
             l.rejected += report.rejected as u64;
             l.fused += report.fused as u64;
             l.refused += report.refused as u64;
+            if report.rejected + report.refused > 0 {
+                self.mark(now, ReplayEvent::LinesRefused);
+            }
             if let Some(out) = self.out.as_mut() {
                 if report.map_built && !self.map_written {
                     out.map(now, self.localizer.map())?;
@@ -1211,6 +1226,7 @@ impl<'a> Run<'a> {
                 let counts = &mut self.summary.tracking;
                 counts.losses += 1;
                 counts.motion_gaps += u64::from(gap);
+                self.mark(now, ReplayEvent::Lost);
                 let why = if gap {
                     "lost: the motion source was silent since the last scan (a motion gap)"
                 } else {
@@ -1309,6 +1325,7 @@ impl<'a> Run<'a> {
                     counts.first_relocalizations_ns.push(now);
                 }
                 self.tracking.locked(counts);
+                self.mark(now, ReplayEvent::Relocalized);
                 if let Some(out) = self.out.as_mut() {
                     out.diagnostics(
                         now,
@@ -1350,6 +1367,13 @@ impl<'a> Run<'a> {
     }
 
     /// An `ekf/tracking` diagnostics message: a loss (level 2) or its end (level 0).
+    /// Notes `event` at `now` for the picture, if events are kept.
+    fn mark(&mut self, now: u64, event: ReplayEvent) {
+        if let Some(log) = self.events.as_mut() {
+            log.events.push((now, event));
+        }
+    }
+
     fn tracking_status(&mut self, now: u64, level: u8, message: &str) -> Result<(), ReplayError> {
         let Some(out) = self.out.as_mut() else {
             return Ok(());

@@ -199,13 +199,7 @@ fn draw<W: std::io::Write>(
         .collect();
     let walls: Vec<Vec<crate::plot::Wall>> = drawn
         .iter()
-        .map(|(s, _)| {
-            s.room
-                .walls
-                .iter()
-                .map(|w| [[w.start.x, w.start.y], [w.end.x, w.end.y]])
-                .collect()
-        })
+        .map(|(s, _)| crate::commands::figures::walls_of(&s.room.walls))
         .collect();
     let trajectories: Vec<Vec<TrajectorySeries<'_>>> = drawn
         .iter()
@@ -256,6 +250,7 @@ fn draw<W: std::io::Write>(
             }),
             estimates: &trajectories[i],
             walls: &walls[i],
+            markers: &[],
         });
     }
     for s in &series {
@@ -263,6 +258,7 @@ fn draw<W: std::io::Write>(
             title: "Distance of the true position from the path",
             series: s,
             y_desc: "distance from path [m]",
+            markers: &[],
         });
     }
     let options = PlotOptions {

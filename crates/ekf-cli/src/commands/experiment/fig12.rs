@@ -218,11 +218,7 @@ fn draw<W: std::io::Write>(
     errors: &[(f64, f64)],
     writer: W,
 ) -> Result<(), crate::plot::PlotError> {
-    let walls: Vec<Wall> = map
-        .segments
-        .iter()
-        .map(|w| [[w.start.x, w.start.y], [w.end.x, w.end.y]])
-        .collect();
+    let walls: Vec<Wall> = crate::commands::figures::walls_of(&map.segments);
     let mut commanded = Trajectory::new();
     for (i, p) in path
         .points()
@@ -264,11 +260,13 @@ fn draw<W: std::io::Write>(
             }),
             estimates: &estimates,
             walls: &walls,
+            markers: &[],
         },
         Panel::ErrorsOverTime {
             title: "Errors over time",
             series: &series,
             y_desc: "[m]",
+            markers: &[],
         },
     ];
     let options = PlotOptions {
