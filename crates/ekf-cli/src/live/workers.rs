@@ -3,7 +3,9 @@
 //! that cannot be reached at start-up ends the run with its error.
 
 use crate::devices::gps::{Fix, NmeaCounters, NmeaReader, Sentence};
-use crate::devices::modbus_base::{BaseClient, BaseConfig, BaseCounters, BaseReading};
+use crate::devices::modbus_base::{
+    BaseClient, BaseConfig, BaseCounters, BaseReading, REQUEST_CHARACTERS,
+};
 use crate::devices::sick::{RangeUnit, SickConfig, SickCounters, SickLaser};
 use crate::devices::{DeviceError, Link, SerialLink};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -286,6 +288,8 @@ pub(crate) struct Base {
     client: BaseClient<SerialLink>,
     period: Duration,
     next_poll: Instant,
+    /// A request's time on the line, from its start to the controller's latch.
+    request_time: Duration,
 }
 
 impl LiveDevice for Base {
@@ -297,10 +301,14 @@ impl LiveDevice for Base {
         let mut client = BaseClient::new(link, settings.client);
         // The controller must answer before the run starts (a silent one is an error).
         while client.poll()?.is_none() {}
+        // 10 bits a character (start, 8 data, stop).
+        let request_time =
+            Duration::from_secs_f64(REQUEST_CHARACTERS * 10.0 / f64::from(settings.baud.max(1)));
         Ok(Base {
             client,
             period: settings.period,
             next_poll: Instant::now(),
+            request_time,
         })
     }
 
@@ -316,7 +324,9 @@ impl LiveDevice for Base {
         }
         if let Some(reading) = self.client.poll()? {
             out.push(Reading::Data {
-                at: Instant::now(),
+                // When the controller latched the sample: the request's arrival, not the
+                // reply's (which a busy host may read late).
+                at: self.client.last_request() + self.request_time,
                 data: Data::Base {
                     reading,
                     connection,

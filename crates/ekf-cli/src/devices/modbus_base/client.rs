@@ -75,6 +75,10 @@ impl std::fmt::Display for PollFault {
     }
 }
 
+/// A register read request's time on the line, in characters: its 8 bytes and the 3.5
+/// characters of silence that end an RTU frame (MODBUS over serial line, §2.5.1.1).
+pub const REQUEST_CHARACTERS: f64 = 8.0 + 3.5;
+
 /// The polling client.
 pub struct BaseClient<L: Link> {
     link: L,
@@ -82,6 +86,8 @@ pub struct BaseClient<L: Link> {
     counters: BaseCounters,
     last_valid: Instant,
     last_fault: Option<PollFault>,
+    /// When the last request was handed to the line.
+    last_request: Instant,
 }
 
 impl<L: Link> BaseClient<L> {
@@ -93,7 +99,16 @@ impl<L: Link> BaseClient<L> {
             counters: BaseCounters::default(),
             last_valid: Instant::now(),
             last_fault: None,
+            last_request: Instant::now(),
         }
+    }
+
+    /// When the last request was handed to the line. The controller latches the sample
+    /// it answers with when the request has arrived, a request's time on the line later
+    /// ([`REQUEST_CHARACTERS`]); unlike the reply's arrival, this does not move when the
+    /// host is slow to read the reply.
+    pub fn last_request(&self) -> Instant {
+        self.last_request
     }
 
     /// Counts so far.
@@ -160,6 +175,7 @@ impl<L: Link> BaseClient<L> {
         self.link
             .clear_input()
             .map_err(|source| self.link.io_error(DEVICE, "clearing the input", source))?;
+        self.last_request = Instant::now();
         self.link
             .write_all_bytes(&frame)
             .map_err(|source| self.link.io_error(DEVICE, "writing a request", source))?;

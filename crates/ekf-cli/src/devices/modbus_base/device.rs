@@ -134,10 +134,16 @@ mod tests {
         echo: bool,
         /// Bytes on the line before each reply.
         noise: Vec<u8>,
+        /// A pause before the next read returns.
+        slow_read: Option<std::time::Duration>,
     }
 
     impl Link for Wire {
         fn read_some(&mut self, buf: &mut [u8]) -> io::Result<usize> {
+            if let Some(pause) = self.slow_read.take() {
+                // A host busy elsewhere: it reads the reply late.
+                std::thread::sleep(pause);
+            }
             let n = buf.len().min(self.to_host.len());
             for (b, v) in buf.iter_mut().zip(self.to_host.drain(..n)) {
                 *b = v;
@@ -186,6 +192,7 @@ mod tests {
             plan: VecDeque::from([Reply::Normal, Reply::Exception, Reply::Corrupt]),
             echo: false,
             noise: Vec::new(),
+            slow_read: None,
         };
         let config = BaseConfig {
             reply_timeout: std::time::Duration::from_millis(20),
@@ -222,6 +229,7 @@ mod tests {
             plan: VecDeque::from([Reply::Normal, Reply::Corrupt]),
             echo: true,
             noise: vec![0x55, 0x01, 0x04, 0x02, 0xaa, 0xbb, 0xcc, 0xdd],
+            slow_read: None,
         };
         let config = BaseConfig {
             reply_timeout: std::time::Duration::from_millis(20),
@@ -239,5 +247,36 @@ mod tests {
         let c = client.counters();
         assert_eq!((c.replies, c.echoes, c.bad_crc), (1, 2, 1), "{c:?}");
         assert!(c.garbage_bytes >= 16, "{c:?}");
+    }
+
+    #[test]
+    fn a_sample_is_timed_by_its_request_not_by_a_late_read_of_the_reply() {
+        use std::time::{Duration, Instant};
+        let pause = Duration::from_millis(30);
+        let wire = Wire {
+            controller: BaseController::new(1),
+            state: BaseState {
+                left_ticks: 1,
+                right_ticks: 2,
+                bearing_tenths: 3,
+            },
+            to_host: VecDeque::new(),
+            plan: VecDeque::new(),
+            echo: false,
+            noise: Vec::new(),
+            slow_read: Some(pause),
+        };
+        let config = BaseConfig {
+            reply_timeout: Duration::from_millis(200),
+            ..BaseConfig::default()
+        };
+        let mut client = BaseClient::new(wire, config);
+        let before = Instant::now();
+        assert!(client.poll().unwrap().is_some());
+        let read = Instant::now();
+        let requested = client.last_request();
+        assert!(requested >= before);
+        // The reply was read at least the pause after the request went out.
+        assert!(read - requested >= pause, "{:?}", read - requested);
     }
 }

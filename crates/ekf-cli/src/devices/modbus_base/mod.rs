@@ -6,7 +6,7 @@ pub mod client;
 pub mod device;
 pub mod tracker;
 
-pub use client::{BaseClient, BaseConfig, BaseCounters};
+pub use client::{BaseClient, BaseConfig, BaseCounters, REQUEST_CHARACTERS};
 pub use tracker::{EncoderTracker, WheelTicks};
 
 /// First input register read: the block below is read in one request (function 04).
