@@ -305,6 +305,14 @@ impl Config {
     /// Checks the values that serde cannot: positive lengths and deviations, probabilities
     /// in (0, 1), valid extraction and matching parameters.
     pub fn validated(self, path: &str) -> Result<Self, ConfigError> {
+        /// Largest wheel radius taken as a robot's (m).
+        const MAX_WHEEL_RADIUS_M: f64 = 2.0;
+        /// Largest track taken as a robot's (m).
+        const MAX_TRACK_M: f64 = 10.0;
+        /// Largest laser offset from the robot's centre (m).
+        const MAX_MOUNT_OFFSET_M: f64 = 10.0;
+        /// Largest map coordinate of a start pose (m): a UTM northing is below 1e7.
+        const MAX_MAP_COORDINATE_M: f64 = 1e7;
         let invalid = |key: &str, message: &str| ConfigError::Invalid {
             path: path.into(),
             line: None,
@@ -351,12 +359,55 @@ impl Config {
                 ));
             }
         }
-        let finite = [
-            ("initial.x", self.initial.x),
-            ("initial.y", self.initial.y),
+        // Sizes a wheeled robot can have: a value outside is a typo or a unit slip
+        // (millimetres for metres), not a robot.
+        let sizes = [
+            (
+                "localizer.robot.wheel_radius",
+                l.robot.wheel_radius,
+                MAX_WHEEL_RADIUS_M,
+            ),
+            ("localizer.robot.track", l.robot.track, MAX_TRACK_M),
+        ];
+        for (key, v, max) in sizes {
+            if v > max {
+                return Err(invalid(
+                    key,
+                    &format!(
+                        "expected metres in (0, {max}], found {} (millimetres?)",
+                        number(v)
+                    ),
+                ));
+            }
+        }
+        let lengths = [
+            ("initial.x", self.initial.x, MAX_MAP_COORDINATE_M),
+            ("initial.y", self.initial.y, MAX_MAP_COORDINATE_M),
+            (
+                "localizer.laser_mount.x",
+                l.laser_mount.x,
+                MAX_MOUNT_OFFSET_M,
+            ),
+            (
+                "localizer.laser_mount.y",
+                l.laser_mount.y,
+                MAX_MOUNT_OFFSET_M,
+            ),
+        ];
+        for (key, v, max) in lengths {
+            if !(v.is_finite() && v.abs() <= max) {
+                return Err(invalid(
+                    key,
+                    &format!(
+                        "expected metres within ±{}, found {}",
+                        number(max),
+                        number(v)
+                    ),
+                ));
+            }
+        }
+        let angles = [
             ("initial.theta", self.initial.theta),
-            ("localizer.laser_mount.x", l.laser_mount.x),
-            ("localizer.laser_mount.y", l.laser_mount.y),
             ("localizer.laser_mount.theta", l.laser_mount.theta),
             (
                 "compass_calibration.declination",
@@ -367,11 +418,14 @@ impl Config {
                 self.compass_calibration.map_offset,
             ),
         ];
-        for (key, v) in finite {
-            if !v.is_finite() {
+        for (key, v) in angles {
+            if !(v.is_finite() && v.abs() <= std::f64::consts::TAU) {
                 return Err(invalid(
                     key,
-                    &format!("expected a finite number, found {v}"),
+                    &format!(
+                        "expected radians within ±2π (6.283), found {} (degrees?)",
+                        number(v)
+                    ),
                 ));
             }
         }
@@ -405,6 +459,16 @@ impl Config {
         lrf_lines::Matcher::new(l.matching)
             .map_err(|e| invalid("localizer.matching", &e.to_string()))?;
         Ok(self)
+    }
+}
+
+/// `v` as a person writes it in a config: plain, or in exponent form when very large or
+/// very small (`1e300`, not 301 digits).
+fn number(v: f64) -> String {
+    if v != 0.0 && v.is_finite() && !(1e-4..1e6).contains(&v.abs()) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
     }
 }
 
@@ -496,6 +560,39 @@ mod tests {
         assert_eq!(
             err,
             "r.toml: line 2: localizer.robot.wheel_radius: expected a finite number > 0, found -0.05"
+        );
+        // Finite but not a robot's, not an angle: named before anything runs.
+        for (toml, expected) in [
+            (
+                "[localizer.robot]\nwheel_radius = 1e300\n",
+                "w.toml: line 2: localizer.robot.wheel_radius: expected metres in (0, 2], \
+                 found 1e300 (millimetres?)",
+            ),
+            (
+                "[compass_calibration]\nmap_offset = 1e300\n",
+                "w.toml: line 2: compass_calibration.map_offset: expected radians within \
+                 ±2π (6.283), found 1e300 (degrees?)",
+            ),
+            (
+                "[initial]\ny = -2e7\n",
+                "w.toml: line 2: initial.y: expected metres within ±1e7, found -2e7",
+            ),
+        ] {
+            let err = Config::from_toml(toml, "w.toml").unwrap_err().to_string();
+            assert_eq!(err, expected);
+        }
+        // A partial laser mount takes 0 for the keys it lacks; degrees are refused.
+        let c = Config::from_toml("[localizer.laser_mount]\ntheta = -1.5\n", "m.toml").unwrap();
+        assert_eq!(
+            c.localizer.laser_mount,
+            ekf_core::Pose2::new(0.0, 0.0, -1.5)
+        );
+        let err = Config::from_toml("[localizer.laser_mount]\ntheta = 90\n", "m.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("line 1") && err.contains("theta: expected radians within ±2π"),
+            "{err}"
         );
         let err = Config::from_toml("[initial]\nx = 1.0\n\nsigma_theta = 0.0\n", "i.toml")
             .unwrap_err()

@@ -7,8 +7,8 @@ use serde::{Deserialize, Serialize};
 
 /// Everything a [`Localizer`](super::Localizer) needs besides the initial state and the
 /// map. Missing groups or fields in a config file take the defaults below
-/// (`#[serde(default)]`, down to the fields of `robot`, `wheel_noise` and
-/// `odometry_noise`); `laser_mount` is a pose and is given whole.
+/// (`#[serde(default)]`, down to the fields of `robot`, `wheel_noise`,
+/// `odometry_noise` and `laser_mount`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct LocalizerConfig {
@@ -23,7 +23,9 @@ pub struct LocalizerConfig {
     pub odometry_noise: OdometryNoise<f64>,
     /// The laser's pose on the robot `(x, y, θ)` (m, m, rad). Default: the identity, a
     /// ROS-style scanner at the robot's origin facing forward. The paper's SICK, whose 0°
-    /// points to the robot's right, is `θ = −π/2`.
+    /// points to the robot's right, is `θ = −π/2`. A table with some of `x`, `y`,
+    /// `theta` takes 0 for the others.
+    #[serde(deserialize_with = "mount_with_defaults")]
     pub laser_mount: Pose2<f64>,
     /// Line extraction. Default: [`ExtractionParams::default`] (a SICK LMS 2xx).
     pub extraction: ExtractionParams,
@@ -46,6 +48,31 @@ impl Default for LocalizerConfig {
             compass: CompassConfig::default(),
         }
     }
+}
+
+/// A laser mount table in which every key is optional (0 when missing).
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PartialPose {
+    #[serde(default)]
+    x: f64,
+    #[serde(default)]
+    y: f64,
+    #[serde(default)]
+    theta: f64,
+}
+
+/// Reads `laser_mount` with each missing key at the identity's value. A `theta` beyond
+/// ±2π is refused rather than wrapped: it is degrees, not radians.
+fn mount_with_defaults<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Pose2<f64>, D::Error> {
+    let p = PartialPose::deserialize(d)?;
+    if !p.theta.is_finite() || p.theta.abs() > core::f64::consts::TAU {
+        return Err(serde::de::Error::custom(format_args!(
+            "theta: expected radians within ±2π (6.283), found {} (degrees?)",
+            p.theta
+        )));
+    }
+    Ok(Pose2::new(p.x, p.y, p.theta))
 }
 
 /// Compass heading noise and gate.
