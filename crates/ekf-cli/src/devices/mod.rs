@@ -3,6 +3,7 @@
 //! Each protocol is a sans-I/O part (bytes in, values out) plus a small driver over a
 //! [`Link`]; the device side of each protocol, for the emulators, lives next to it.
 
+pub mod arrival_clock;
 pub mod config;
 pub mod error;
 pub mod gps;

@@ -7,6 +7,7 @@ use super::parser::{DiscardKind, Event, ParserStats, TelegramParser};
 use super::telegram::{
     BaudRate, Mode, Telegram, Variant, FRAME_OVERHEAD, REPLY_MEASURED, REPLY_MODE, REPLY_VARIANT,
 };
+use crate::devices::arrival_clock::ArrivalClock;
 use crate::devices::{DeviceError, Link};
 use std::time::{Duration, Instant};
 
@@ -56,7 +57,9 @@ pub struct Scan {
     /// The values as the scanner sent them.
     pub values: MeasuredValues,
     /// When the telegram's last byte arrived: the read that brought it, less the time of
-    /// the bytes that came after it in the same reads.
+    /// the bytes that came after it in the same reads, then put on the send grid of the
+    /// continuous output ([`ArrivalClock`]) so that a read the host made late does not
+    /// make the scan late.
     pub received: Instant,
     /// When the scan was measured: [`Self::received`] less the telegram's time on the line
     /// (bytes · 10 / baud) and half the sweep ([`Variant::sweep_duration`]), so the middle
@@ -74,6 +77,8 @@ pub struct SickLaser<L: Link> {
     last_fault: Option<String>,
     /// When the last read that brought bytes returned.
     last_read: Instant,
+    /// Times the telegrams of the continuous output on their send grid.
+    clock: ArrivalClock,
 }
 
 impl<L: Link> SickLaser<L> {
@@ -87,6 +92,7 @@ impl<L: Link> SickLaser<L> {
             counters: SickCounters::default(),
             last_fault: None,
             last_read: Instant::now(),
+            clock: ArrivalClock::new(),
         };
         laser.find_baud_rate()?;
         laser.switch_baud_rate()?;
@@ -176,7 +182,8 @@ impl<L: Link> SickLaser<L> {
                 self.counters.scans += 1;
                 // The bytes still in the parser came after this telegram's last byte.
                 let after = self.baud.byte_time() * self.parser.pending() as u32;
-                let received = self.last_read.checked_sub(after).unwrap_or(self.last_read);
+                let read = self.last_read.checked_sub(after).unwrap_or(self.last_read);
+                let received = self.clock.time_of(read);
                 let on_line = self
                     .baud
                     .transmission_time(t.data.len() + 1 + FRAME_OVERHEAD);
