@@ -70,6 +70,22 @@ fn marker_style(event: ReplayEvent) -> (MarkerShape, (u8, u8, u8)) {
     }
 }
 
+/// One marker set per event kind, styled by [`marker_style`].
+fn event_markers<P>(events: &[(ReplayEvent, Vec<P>)]) -> Vec<Markers<'_, P>> {
+    events
+        .iter()
+        .map(|(kind, points)| {
+            let (shape, colour) = marker_style(*kind);
+            Markers {
+                name: kind.name(),
+                points,
+                shape,
+                colour,
+            }
+        })
+        .collect()
+}
+
 /// The pose of `trajectory` at or just before `t_ns` (the first pose before it starts).
 fn pose_at(trajectory: &Trajectory, t_ns: u64) -> Option<(f64, f64)> {
     let poses = &trajectory.samples;
@@ -139,30 +155,8 @@ pub fn replay_svg<W: Write>(
             over_time.push((kind, tv));
         }
     }
-    let map_markers: Vec<Markers<'_, (f64, f64)>> = on_map
-        .iter()
-        .map(|(kind, points)| {
-            let (shape, colour) = marker_style(*kind);
-            Markers {
-                name: kind.name(),
-                points,
-                shape,
-                colour,
-            }
-        })
-        .collect();
-    let time_markers: Vec<Markers<'_, (u64, f64)>> = over_time
-        .iter()
-        .map(|(kind, points)| {
-            let (shape, colour) = marker_style(*kind);
-            Markers {
-                name: kind.name(),
-                points,
-                shape,
-                colour,
-            }
-        })
-        .collect();
+    let map_markers = event_markers(&on_map);
+    let time_markers = event_markers(&over_time);
     // The bound first, so that the error is drawn over it.
     let mut series = vec![TimeSeries {
         name: "2σ (filter)",
