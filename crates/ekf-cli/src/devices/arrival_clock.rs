@@ -34,7 +34,7 @@ impl ArrivalClock {
     /// window's reads, with `T` the median interval between reads (missed telegrams
     /// give multiples of it, which the median ignores) and `φ` the phase of the
     /// earliest read relative to the grid; `read` itself until the window has
-    /// [`MIN_READS`] reads, or if the reads are not periodic.
+    /// `MIN_READS` (8) reads, or if the reads are not periodic.
     pub fn time_of(&mut self, read: Instant) -> Instant {
         if self.reads.len() == WINDOW {
             self.reads.pop_front();
