@@ -431,6 +431,105 @@ def test_a_failed_update_leaves_the_filter_unchanged():
     assert f.counts == counts
 
 
+# ------------------------------------------------------------ state and covariance
+
+
+def test_state_and_covariance_can_be_assigned_like_filterpys_x_and_p():
+    f = F((1.0, 2.0, 0.3), np.eye(3) * 1e-3)
+    f.predict_wheels(2.0, 2.5, 0.1)
+    cov, counts = f.covariance, f.counts
+    f.state = [4.0, -1.0, 4.0]  # theta wrapped; the covariance kept
+    assert f.state.tolist() == [4.0, -1.0, 4.0 - 2 * math.pi]
+    assert np.array_equal(f.covariance, cov)
+    p = np.array([[2e-3, 1e-4, 0.0], [1e-4, 3e-3, -2e-4], [0.0, -2e-4, 1e-3]])
+    f.covariance = p  # the state kept
+    assert np.array_equal(f.covariance, p)
+    assert f.state.tolist() == [4.0, -1.0, 4.0 - 2 * math.pi]
+    # Round-off asymmetry (here 3e-10 of the largest entry) is symmetrised, from any
+    # array-like.
+    skew = p.copy()
+    skew[0, 1] += 1e-12
+    f.covariance = skew.tolist()
+    assert np.array_equal(f.covariance, (skew + skew.T) / 2)
+    assert f.covariance[0, 1] != p[0, 1]
+    # Reading gives copies: changing them changes nothing.
+    f.state[0] = 99.0
+    f.covariance[0, 0] = 99.0
+    assert f.state[0] == 4.0 and f.covariance[0, 0] == 2e-3
+    assert f.counts == counts
+    # Then it is the filter made with that state and covariance, bit for bit.
+    g = F((4.0, -1.0, 4.0), (skew + skew.T) / 2)
+    for filt in (f, g):
+        filt.predict_wheels(2.0, 2.5, 0.1)
+        filt.update_compass(-2.2)
+        filt.update_lines(*ONE_LINE)
+    assert f.state.tobytes() == g.state.tobytes()
+    assert f.covariance.tobytes() == g.covariance.tobytes()
+
+
+ASYMMETRIC = np.array([[1.0, 0.5, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]) * 1e-3
+SETTER_ERRORS = [
+    # (attribute, value, exception, the whole message)
+    ("state", (1.0, 2.0), ValueError, "state: expected shape (3,) as (x, y, theta), got (2,)"),
+    ("state", (1.0, math.nan, 0.0), ValueError, "state[1] is NaN; expected a finite number"),
+    ("state", [[1.0, 2.0, 0.3]], ValueError,
+     "state: expected a 1-dimensional array, got shape (1, 3)"),
+    ("state", "north", TypeError,
+     "state: expected real numbers (a float or integer dtype), got dtype <U5"),
+    ("covariance", np.eye(2), ValueError, "covariance: expected shape (3, 3), got (2, 2)"),
+    ("covariance", [[1e-3, 0, 0], [0, 1e-3, math.inf], [0, 0, 1e-3]], ValueError,
+     "covariance[1, 2] is inf; expected a finite number"),
+    ("covariance", ASYMMETRIC, ValueError,
+     "covariance: expected a symmetric matrix (to a relative tolerance of 1.5e-8), "
+     "got covariance[0, 1] = 0.0005 and covariance[1, 0] = 0"),
+    ("covariance", np.diag([1e-3, -1e-3, 2e-3]), ValueError,
+     "covariance: expected a positive definite matrix, "
+     "got eigenvalues -1.000e-03, 1.000e-03, 2.000e-03"),
+    ("covariance", np.zeros((3, 3)), ValueError,
+     "covariance: expected a positive definite matrix, "
+     "got eigenvalues 0.000e+00, 0.000e+00, 0.000e+00"),
+]
+
+
+@pytest.mark.parametrize("name, value, exception, message", SETTER_ERRORS,
+                         ids=[f"{e[0]}-{i}" for i, e in enumerate(SETTER_ERRORS)])
+def test_assigning_a_bad_state_or_covariance_raises_and_changes_nothing(
+        name, value, exception, message):
+    f = F((1.0, 2.0, 0.3), np.eye(3) * 1e-3)
+    with pytest.raises(exception) as info:
+        setattr(f, name, value)
+    assert str(info.value) == message
+    assert f.state.tolist() == [1.0, 2.0, 0.3]
+    assert np.array_equal(f.covariance, np.eye(3) * 1e-3)
+
+
+def test_a_bad_pickled_state_is_refused_with_a_clear_message():
+    f = F((1.0, 2.0, 0.3), np.eye(3) * 1e-3)
+    good = f.__getstate__()
+    assert good["state"] == [1.0, 2.0, 0.3] and good["version"] == 1
+    cases = [
+        (dict(good, version=2), ValueError,
+         "Filter state: version 2 is not supported (this ekf_loc reads version 1)"),
+        ({k: v for k, v in good.items() if k != "counts"}, ValueError,
+         'Filter state: missing "counts"'),
+        (dict(good, robot=[0.05]), ValueError, 'Filter state: "robot": expected 2 floats'),
+        (dict(good, covariance=[[1, 0, 0], [0, -1, 0], [0, 0, 1]]), ValueError,
+         "Filter state: covariance is not positive definite"),
+        (dict(good, state=[0.0, math.inf, 0.0]), ValueError,
+         "Filter state: state is not finite (NaN or infinite)"),
+        (dict(good, robot=[0.05, 0.0]), ValueError,
+         "Filter state: track is out of range: expected > 0"),
+        (dict(good, line_gate=-1.0), ValueError,
+         "Filter state: gate threshold is out of range: expected a finite number > 0"),
+        ([1, 2], TypeError, "Filter state: expected a dict from Filter.__getstate__, got list"),
+    ]
+    for state, exception, message in cases:
+        with pytest.raises(exception) as info:
+            f.__setstate__(state)
+        assert str(info.value) == message
+    assert f.__getstate__() == good
+
+
 # ----------------------------------------------------------------------------- example
 
 
@@ -487,6 +586,8 @@ def test_no_input_makes_rust_panic():
     lines = ekf_loc.extract_lines(room_scan(POSE), ANGLE_MIN, ANGLE_INCREMENT)
     calls = [
         lambda g: F(g(), g()),
+        lambda g: setattr(F(), "state", g()),
+        lambda g: setattr(F(), "covariance", g()),
         lambda g: F().update_lines(g(), g(), g()),
         lambda g: F().run(wheels=g(), compass=g()),
         lambda g: F().run(odometry=g(), line_observed=g(), line_covariances=g(),

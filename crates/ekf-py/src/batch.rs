@@ -5,6 +5,7 @@
 use crate::arrays::{check_len, check_shape, matrix2, new_array, real_array, row_major3};
 use crate::core::Core;
 use crate::errors::value_error;
+use ekf_core::UpdateOutcome;
 use numpy::ndarray::{s, ArrayView1, ArrayView2, ArrayView3, ArrayView4};
 use numpy::{Ix1, Ix2, Ix3, Ix4, PyArray1, PyArray2, PyArray3, PyArrayMethods, PyReadonlyArray};
 use pyo3::exceptions::{PyTypeError, PyValueError};
@@ -140,7 +141,7 @@ fn steps(core: &mut Core, inputs: &Inputs<'_>, n: usize, k: usize) -> Result<Out
         .map_err(fail)?;
         if let Some((headings, mask)) = &inputs.compass {
             if mask.as_ref().is_none_or(|m| m[step]) {
-                let o = core
+                let o: UpdateOutcome<f64> = core
                     .update_compass(headings[step], variance)
                     .map_err(fail)?;
                 out.compass_nis[step] = o.nis;
@@ -153,11 +154,12 @@ fn steps(core: &mut Core, inputs: &Inputs<'_>, n: usize, k: usize) -> Result<Out
                 let z = (lines.observed[[step, j, 0]], lines.observed[[step, j, 1]]);
                 let m = (lines.map[[step, j, 0]], lines.map[[step, j, 1]]);
                 let r = matrix2(&lines.covariances.slice(s![step, j, .., ..]));
-                let o = core.update_line(z, r, m).map_err(|error| StepError {
-                    step,
-                    line: Some(j),
-                    error,
-                })?;
+                let o: UpdateOutcome<f64> =
+                    core.update_line(z, r, m).map_err(|error| StepError {
+                        step,
+                        line: Some(j),
+                        error,
+                    })?;
                 out.line_nis[step * k + j] = o.nis;
                 out.line_accepted[step * k + j] = o.accepted;
             }

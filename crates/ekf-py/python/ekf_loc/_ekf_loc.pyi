@@ -47,7 +47,13 @@ _SteerBy: TypeAlias = Literal["truth", "ekf", "odometry"]
 
 @final
 class UpdateOutcome:
-    """The outcome of one update."""
+    """The outcome of one update, with FilterPy's names for the innovation ``y``, its
+    covariance ``S`` and the gain ``K``.
+
+    ``y = z - h(x)`` (wrapped) and ``S = H P H^T + R`` are at the state before the update,
+    whether or not the gate let the measurement through. ``K = P H^T S^-1`` is the gain
+    that was applied: zeros if the gate refused the measurement, so ``x+ = x- + K y``
+    holds either way (up to the wrapping of theta)."""
 
     @property
     def accepted(self) -> bool:
@@ -56,6 +62,15 @@ class UpdateOutcome:
     @property
     def nis(self) -> float:
         """Normalised innovation squared y^T S^-1 y (chi-square, dof = measurement size)."""
+    @property
+    def y(self) -> _F64Array:
+        """(1,) innovation z - h(x) (rad, wrapped), at the state before the update."""
+    @property
+    def S(self) -> _F64Array:
+        """(1, 1) innovation covariance H P H^T + R (rad^2), at the state before the update."""
+    @property
+    def K(self) -> _F64Array:
+        """(3, 1) gain P H^T S^-1 that was applied; zeros if the gate refused the update."""
 
 @final
 class CompassUpdate:
@@ -78,7 +93,15 @@ class CompassUpdate:
 
 @final
 class LineUpdates:
-    """The outcomes of a sequence of line updates, one entry per line, in order."""
+    """The outcomes of a sequence of line updates, one entry per line, in order.
+
+    The lines are fused one after the other, each at the state the lines before it left,
+    so ``y``, ``S`` and ``K`` are per line, as ``nis`` is: line i's own innovation, its
+    covariance and gain at the state it was fused into, exactly what FilterPy's ``update``
+    leaves in ``y``, ``S`` and ``K`` when called once per line. They are not the blocks of
+    one stacked 2N-row update (whose gain comes from the covariance before all the lines).
+    A refused line has ``K`` zeros (nothing applied), and ``y``, ``S`` at the state it was
+    offered to."""
 
     @property
     def nis(self) -> _F64Array:
@@ -86,6 +109,15 @@ class LineUpdates:
     @property
     def accepted(self) -> _BoolArray:
         """(N,) whether each line passed the gate and was fused."""
+    @property
+    def y(self) -> _F64Array:
+        """(N, 2) innovation (r, psi) of each line (m, rad; psi wrapped)."""
+    @property
+    def S(self) -> _F64Array:
+        """(N, 2, 2) innovation covariance H P H^T + R of each line."""
+    @property
+    def K(self) -> _F64Array:
+        """(N, 3, 2) gain P H^T S^-1 applied for each line; zeros for a refused line."""
 
 @final
 class BatchResult:
@@ -137,10 +169,18 @@ class Filter:
     ) -> Filter: ...
     @property
     def state(self) -> _F64Array:
-        """(3,) state [x, y, theta] (m, m, rad)."""
+        """(3,) state [x, y, theta] (m, m, rad), a new array each time. Assign three
+        finite numbers to replace it (theta wrapped; the covariance kept), as FilterPy's
+        ``x``."""
+    @state.setter
+    def state(self, value: _Pose) -> None: ...
     @property
     def covariance(self) -> _F64Array:
-        """(3, 3) covariance of (x, y, theta)."""
+        """(3, 3) covariance of (x, y, theta), a new array each time. Assign a 3x3 matrix
+        to replace it (the state kept), as FilterPy's ``P``: finite, symmetric to a
+        relative tolerance of 1.5e-8 (then symmetrised) and positive definite."""
+    @covariance.setter
+    def covariance(self, value: _ArrayLike) -> None: ...
     @property
     def laser_mount(self) -> Tuple[float, float, float]:
         """The laser's pose on the robot (x, y, theta)."""
@@ -158,14 +198,15 @@ class Filter:
         ``dtheta`` (rad), with the odometry noise model."""
     def update_compass(self, heading: float, variance: Optional[float] = None) -> UpdateOutcome:
         """Fuses a compass heading (rad, map frame) with ``variance`` (rad^2; default the
-        config's); the innovation is wrapped."""
+        config's); the innovation is wrapped. The outcome has ``y``, ``S`` and ``K``."""
     def update_lines(
         self, observed: _ArrayLike, covariances: _ArrayLike, map_lines: _ArrayLike
     ) -> LineUpdates:
         """Fuses N matched laser lines one at a time, in order: ``observed`` (N, 2) as
         (r, psi) in the laser frame (m, rad), ``covariances`` (N, 2, 2) of (r, psi),
-        ``map_lines`` (N, 2) as (rho, beta) in the world frame. All or nothing: on an
-        error the filter is left as it was."""
+        ``map_lines`` (N, 2) as (rho, beta) in the world frame. The result has each
+        line's ``nis``, ``accepted``, ``y``, ``S`` and ``K``. All or nothing: on an error
+        the filter is left as it was."""
     def run(
         self,
         *,
@@ -186,6 +227,16 @@ class Filter:
         (N, K, 2). Unused entries are never read (they may be NaN). Exactly the results of
         the per-call methods. All or nothing: an error names the step and leaves the
         filter as it was."""
+    def __copy__(self) -> Filter:
+        """An independent copy (a Filter shares nothing mutable, so as ``__deepcopy__``)."""
+    def __deepcopy__(self, memo: dict[int, Any]) -> Filter:
+        """An independent copy: it continues bit for bit as the original would."""
+    def __getstate__(self) -> dict[str, Any]:
+        """Everything the filter holds as a dict of numbers (version 1; floats exact)."""
+    def __setstate__(self, state: Mapping[str, Any]) -> None:
+        """Replaces everything with a dict from ``__getstate__`` (validated)."""
+    def __reduce__(self) -> Tuple[type[Filter], Tuple[()], dict[str, Any]]:
+        """For pickle: rebuilt with ``Filter()`` and ``__setstate__``."""
 
 @final
 class Lines:
