@@ -19,8 +19,8 @@ cargo clippy --workspace --all-targets -- -D warnings
 step "cargo test (workspace)"
 cargo test --workspace
 
-step "no_std builds for thumbv7em-none-eabihf (ekf-core without alloc, lrf-lines with alloc)"
-cargo build -p ekf-core -p lrf-lines --no-default-features --target thumbv7em-none-eabihf
+step "no_std builds for thumbv7em-none-eabihf (ekf-core without alloc, lrf-lines and ekf-fusion with alloc)"
+cargo build -p ekf-core -p lrf-lines -p ekf-fusion --no-default-features --target thumbv7em-none-eabihf
 
 step "cargo doc"
 RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps

@@ -80,8 +80,9 @@ pub struct Config {
     pub timing: TimingConfig,
 }
 
-/// Measurements fused at their own stamps (`replay::reorder`): replay holds each input
-/// back until one stamped `max_lag` later has been read, and fuses them in stamp order.
+/// Measurements fused at their own stamps ([`ekf_fusion::TimedLocalizer`]): replay holds
+/// each input back until one stamped `max_lag` later has been read, and fuses them in
+/// stamp order.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct TimingConfig {
@@ -259,6 +260,19 @@ impl Default for LaserConfig {
 }
 
 impl Config {
+    /// The time-ordered localizer's configuration for `mode`, loss detection off (the
+    /// caller knows whether there is a map to search).
+    pub fn fusion(&self, mode: ekf_fusion::Mode) -> ekf_fusion::FusionConfig {
+        ekf_fusion::FusionConfig {
+            localizer: self.localizer.clone(),
+            mode,
+            tracking: ekf_fusion::Tracking::Off,
+            max_lag: self.timing.max_lag,
+            max_wheel_turns_per_s: self.devices.max_wheel_turns_per_s,
+            position_gate_probability: self.gps.gate_probability,
+        }
+    }
+
     /// Parses TOML text; `path` names the source in errors.
     pub fn from_toml(text: &str, path: &str) -> Result<Self, ConfigError> {
         let config: Config = toml::from_str(text).map_err(|e| ConfigError::Parse {

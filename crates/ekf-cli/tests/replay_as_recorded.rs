@@ -1,7 +1,7 @@
 //! Bags as robots record them. Measurements logged after their header stamps (a busy
-//! robot computer) are fused at their stamps (`replay::reorder`): the bundled simulated
-//! run, with its scans or its compass headings logged late, places the robot as well as
-//! on time.
+//! robot computer) are fused at their stamps (`ekf_fusion::TimedLocalizer`): the bundled
+//! simulated run, with its scans or its compass headings logged late, places the robot as
+//! well as on time.
 
 use ekf_cli::config::Config;
 use ekf_cli::mcap_io::{BagReader, BagWriter};

@@ -11,11 +11,12 @@ use crate::config::{Config, MotionSource};
 use crate::devices::modbus_base::{BaseConfig, BaseReading, EncoderTracker, WheelTicks};
 use crate::devices::sick::{BaudRate, SickConfig, Variant};
 use crate::devices::DeviceError;
-use crate::replay::{Forecast, Mode, Preamble, ReplayError, ReplayOptions, ReplaySummary, Run};
+use crate::replay::{Mode, Preamble, ReplayError, ReplayOptions, ReplaySummary, Run};
 use crate::ros2::builtin_interfaces::Time;
 use crate::ros2::diagnostic_msgs::{DiagnosticArray, DiagnosticStatus, KeyValue};
 use crate::ros2::std_msgs::Header;
 use ekf_core::Pose2;
+use ekf_fusion::Forecast;
 use messages::{RecordError, Recorder};
 use nalgebra::Matrix3;
 use std::collections::{BTreeMap, BTreeSet};
@@ -466,10 +467,13 @@ impl<'a> Live<'a> {
             true,
             &name,
             &config.topics.joint_states,
+            // The readings come in the order they were made (`hold_back`): each is fused
+            // as it is handed on.
+            0,
         )?;
         let mut recorder = Recorder::new(Path::new(&name));
         let message = recorder.record_at(run.output(), &config.topics.tf_static, t0, &tf)?;
-        run.handle(&message, message.log_time)?;
+        run.handle(&message)?;
         Ok(Self {
             config,
             run,
@@ -637,7 +641,7 @@ impl<'a> Live<'a> {
         message: &M,
     ) -> Result<(), LiveError> {
         let m = self.recorder.record(self.run.output(), topic, message)?;
-        self.run.handle(&m, m.log_time)?;
+        self.run.handle(&m)?;
         Ok(())
     }
 

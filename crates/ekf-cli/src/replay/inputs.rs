@@ -1,218 +1,49 @@
-//! Turns ROS 2 messages into filter inputs: wheel speeds from joint states, motion from
-//! odometry poses, headings from `Imu` / `MagneticField`, reference poses, and the laser's
-//! mounting pose from `/tf_static`.
+//! Turns ROS 2 messages into filter inputs ([`ekf_fusion::Input`]): wheel angles or
+//! speeds from joint states, odometry poses, headings from `Imu` / `MagneticField`,
+//! positions from `NavSatFix`, reference poses, and the laser's mounting pose from
+//! `/tf_static`.
 
 use crate::config::{CompassCalibrationConfig, GpsConfig};
 use crate::geo::GeoOrigin;
 use crate::ros2::geometry_msgs::{Pose, TransformStamped};
 use crate::ros2::sensor_msgs::{Imu, JointState, MagneticField, NavSatFix, NavSatStatus};
-use ekf_core::{heading_from_compass_bearing, wrap_angle, Motion, Pose2, WheelSpeeds};
+use ekf_core::{heading_from_compass_bearing, wrap_angle, Pose2};
+use ekf_fusion::{Input, Skip};
 use nalgebra::{Matrix2, Vector2};
 
-/// Why one message could not be used; the replay counts it as a warning and goes on.
-#[derive(Debug, Clone, PartialEq)]
-pub enum Skip {
-    /// The stamp is not after the previous one on the same topic.
-    TimeNotIncreasing {
-        /// Previous stamp (ns).
-        previous_ns: u64,
-        /// This stamp (ns).
-        stamp_ns: u64,
-    },
-    /// A field is NaN or infinite.
-    NonFinite {
-        /// The field.
-        field: &'static str,
-    },
-    /// The message says it has no such estimate (ROS: −1 in element 0 of its covariance).
-    NotProvided {
-        /// The field.
-        field: &'static str,
-    },
-    /// The first message of a differentiated or delta stream only sets the start.
-    First,
-    /// A field is finite but physically impossible or unusable.
-    Implausible {
-        /// The field.
-        field: &'static str,
-        /// What it should be.
-        expected: &'static str,
-        /// What it was.
-        found: f64,
-    },
-}
-
-impl std::fmt::Display for Skip {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            Skip::TimeNotIncreasing {
-                previous_ns,
-                stamp_ns,
-            } if previous_ns == stamp_ns => {
-                write!(f, "duplicate stamp {stamp_ns} ns")
-            }
-            Skip::TimeNotIncreasing {
-                previous_ns,
-                stamp_ns,
-            } => {
-                write!(
-                    f,
-                    "time going backwards: stamp {stamp_ns} ns after {previous_ns} ns"
-                )
-            }
-            Skip::NonFinite { field } => write!(f, "{field} is not finite"),
-            Skip::NotProvided { field } => {
-                write!(f, "{field} not provided ({field}_covariance[0] = -1)")
-            }
-            Skip::First => write!(f, "first message sets the start"),
-            Skip::Implausible {
-                field,
-                expected,
-                found,
-            } => write!(f, "{field}: expected {expected}, found {found}"),
-        }
+/// The wheel input a joint state is: the encoder angles (`position`) of the joints named
+/// `left` and `right`, or their velocities when the message has no positions.
+/// `Err(names)` when the message lacks one of the joints (the names it has);
+/// `Ok(Err(skip))` when it has neither positions nor velocities for them. Readings the
+/// wheels cannot make are judged by [`ekf_fusion::wheels::WheelTracker`].
+pub fn wheel_input(
+    msg: &JointState,
+    left: &str,
+    right: &str,
+) -> Result<Result<Input, Skip>, Vec<String>> {
+    let find = |name: &str| msg.name.iter().position(|n| n == name);
+    let (Some(l), Some(r)) = (find(left), find(right)) else {
+        return Err(msg.name.clone());
+    };
+    if let (Some(&left), Some(&right)) = (msg.position.get(l), msg.position.get(r)) {
+        return Ok(Ok(Input::WheelAngles { left, right }));
+    }
+    match (msg.velocity.get(l), msg.velocity.get(r)) {
+        (Some(&left), Some(&right)) => Ok(Ok(Input::WheelVelocities { left, right })),
+        _ => Ok(Err(Skip::NonFinite {
+            field: "velocity (missing)",
+        })),
     }
 }
 
-/// Stamp jitter allowed when an encoder increment is judged against the fastest the
-/// wheels can turn (s): a reading stamped when it was received can be late by a
-/// scheduling delay, and the next one then comes soon after it with a normal increment.
-const STAMP_JITTER_S: f64 = 0.05;
-
-/// Wheel speeds from `sensor_msgs/JointState`: the difference of `position` over the stamp
-/// difference (the encoder increment), or `velocity` when the message has no positions.
-/// A wheel that would have turned faster than the robot's wheels can is a broken reading
-/// (an encoder spike or jump, a counter reset): it is skipped, and the next increment is
-/// taken from it, so a spike costs two readings and a jump one.
-#[derive(Debug, Clone)]
-pub struct WheelTracker {
-    left: String,
-    right: String,
-    /// Fastest plausible wheel speed (rad/s).
-    max_speed: f64,
-    previous: Option<(u64, f64, f64)>,
-}
-
-impl WheelTracker {
-    /// Tracks the joints named `left` and `right`, whose wheels turn at most
-    /// `max_turns_per_s` (the configuration's `devices.max_wheel_turns_per_s`).
-    pub fn new(left: &str, right: &str, max_turns_per_s: f64) -> Self {
-        Self {
-            left: left.into(),
-            right: right.into(),
-            max_speed: max_turns_per_s * core::f64::consts::TAU,
-            previous: None,
-        }
-    }
-
-    /// Wheel speeds over the interval ending at this message. `Err(names)` when the message
-    /// lacks one of the joints (the names it has); `Ok(Err(skip))` when it cannot be used.
-    pub fn speeds(
-        &mut self,
-        stamp_ns: u64,
-        msg: &JointState,
-    ) -> Result<Result<WheelSpeeds<f64>, Skip>, Vec<String>> {
-        let find = |name: &str| msg.name.iter().position(|n| n == name);
-        let (Some(l), Some(r)) = (find(&self.left), find(&self.right)) else {
-            return Err(msg.name.clone());
-        };
-        let (Some(&pl), Some(&pr)) = (msg.position.get(l), msg.position.get(r)) else {
-            return Ok(self.speeds_from_velocity_only(stamp_ns, msg, l, r));
-        };
-        if !(pl.is_finite() && pr.is_finite()) {
-            return Ok(Err(Skip::NonFinite { field: "position" }));
-        }
-        let previous = self.previous.replace((stamp_ns, pl, pr));
-        let Some((t0, pl0, pr0)) = previous else {
-            return Ok(Err(Skip::First));
-        };
-        if stamp_ns <= t0 {
-            self.previous = Some((t0, pl0, pr0));
-            return Ok(Err(Skip::TimeNotIncreasing {
-                previous_ns: t0,
-                stamp_ns,
-            }));
-        }
-        // The encoder increment over the interval is exact; a velocity in the same message
-        // is one sample at its end, so it is not used (paper eqs. 1–2 integrate ω over Δt).
-        let dt = (stamp_ns - t0) as f64 * 1e-9;
-        let largest = (pl - pl0).abs().max((pr - pr0).abs());
-        if largest > self.max_speed * (dt + STAMP_JITTER_S) {
-            return Ok(Err(Skip::Implausible {
-                field: "position",
-                expected: "an encoder increment the wheels can make in the interval \
-                           (devices.max_wheel_turns_per_s, 50 ms of stamp jitter allowed; rad)",
-                found: largest,
-            }));
-        }
-        Ok(WheelSpeeds::from_increments(pl - pl0, pr - pr0, dt)
-            .map_err(|_| Skip::NonFinite { field: "position" }))
-    }
-
-    /// A message with velocities but no positions: the interval is the stamp difference.
-    fn speeds_from_velocity_only(
-        &mut self,
-        stamp_ns: u64,
-        msg: &JointState,
-        l: usize,
-        r: usize,
-    ) -> Result<WheelSpeeds<f64>, Skip> {
-        let (Some(&vl), Some(&vr)) = (msg.velocity.get(l), msg.velocity.get(r)) else {
-            return Err(Skip::NonFinite {
-                field: "velocity (missing)",
-            });
-        };
-        if !(vl.is_finite() && vr.is_finite()) {
-            return Err(Skip::NonFinite { field: "velocity" });
-        }
-        let previous = self.previous.replace((stamp_ns, 0.0, 0.0));
-        let Some((t0, _, _)) = previous else {
-            return Err(Skip::First);
-        };
-        if stamp_ns <= t0 {
-            self.previous = previous;
-            return Err(Skip::TimeNotIncreasing {
-                previous_ns: t0,
-                stamp_ns,
-            });
-        }
-        WheelSpeeds::new(vl, vr, (stamp_ns - t0) as f64 * 1e-9)
-            .map_err(|_| Skip::NonFinite { field: "velocity" })
-    }
-}
-
-/// Motion steps from consecutive `nav_msgs/Odometry` poses.
-#[derive(Debug, Clone, Default)]
-pub struct OdometryTracker {
-    previous: Option<(u64, Pose2<f64>)>,
-}
-
-impl OdometryTracker {
-    /// The motion from the previous odometry pose to this one, and the stamp of the
-    /// previous one (the start of the interval).
-    pub fn motion(&mut self, stamp_ns: u64, pose: &Pose) -> Result<(Motion<f64>, u64), Skip> {
-        let pose = pose2(pose).ok_or(Skip::NonFinite { field: "pose" })?;
-        let Some((t0, p0)) = self.previous else {
-            self.previous = Some((stamp_ns, pose));
-            return Err(Skip::First);
-        };
-        if stamp_ns <= t0 {
-            return Err(Skip::TimeNotIncreasing {
-                previous_ns: t0,
-                stamp_ns,
-            });
-        }
-        self.previous = Some((stamp_ns, pose));
-        let motion = Motion::from_odometry_poses(&p0, &pose)
-            .map_err(|_| Skip::NonFinite { field: "pose" })?;
-        Ok((motion, t0))
-    }
+/// A `geometry_msgs/Pose` as a planar pose (yaw of the quaternion), finite or not.
+pub fn planar(p: &Pose) -> Pose2<f64> {
+    Pose2::new(p.position.x, p.position.y, p.orientation.yaw())
 }
 
 /// A `geometry_msgs/Pose` as a planar pose (yaw of the quaternion); `None` if not finite.
 pub fn pose2(p: &Pose) -> Option<Pose2<f64>> {
-    let pose = Pose2::new(p.position.x, p.position.y, p.orientation.yaw());
-    pose.validated("pose").ok()
+    planar(p).validated("pose").ok()
 }
 
 /// A heading reading (rad, map frame) and its variance, if the message gives one.
@@ -474,6 +305,40 @@ pub fn mount_from_tf(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use ekf_core::WheelSpeeds;
+
+    /// A joint state through [`wheel_input`] and the fusion's wheel tracker, as replay
+    /// takes it.
+    struct WheelTracker {
+        left: &'static str,
+        right: &'static str,
+        tracker: ekf_fusion::wheels::WheelTracker,
+    }
+
+    impl WheelTracker {
+        fn new(left: &'static str, right: &'static str, max_turns_per_s: f64) -> Self {
+            Self {
+                left,
+                right,
+                tracker: ekf_fusion::wheels::WheelTracker::new(max_turns_per_s),
+            }
+        }
+
+        fn speeds(
+            &mut self,
+            stamp: u64,
+            msg: &JointState,
+        ) -> Result<Result<WheelSpeeds<f64>, Skip>, Vec<String>> {
+            let input = wheel_input(msg, self.left, self.right)?;
+            Ok(input.and_then(|input| match input {
+                Input::WheelAngles { left, right } => self.tracker.angles(stamp, left, right),
+                Input::WheelVelocities { left, right } => {
+                    self.tracker.velocities(stamp, left, right)
+                }
+                other => panic!("not a wheel input: {other:?}"),
+            }))
+        }
+    }
 
     #[test]
     fn gps_fixes_become_map_positions() {

@@ -11,80 +11,38 @@
 //! failure is returned next to the results ([`ReplayOutcome::failure`]).
 
 pub mod accuracy;
-pub mod consistency;
 pub mod events;
 pub mod inputs;
 pub mod outputs;
-pub mod reorder;
 mod sink;
+pub mod stamps;
 pub mod summary;
-pub mod tracking;
-pub mod verification;
 
 use crate::config::{Config, MotionSource};
-use crate::mcap_io::{BagMessage, BagReader, MessageError, ReadError, WriteError};
+use crate::mcap_io::{BagMessage, BagReader, ChannelInfo, MessageError, ReadError, WriteError};
 use crate::ros2::geometry_msgs::TransformStamped;
 use crate::ros2::sensor_msgs::JointState;
 use crate::ros2::{type_name_matches, AnyMessage};
 use crate::trajectory::{StampedPose, Trajectory};
-use ekf_core::ChiSquareGate;
-use ekf_core::{Motion, Pose2, WheelSpeeds};
+use ekf_core::Pose2;
+use ekf_fusion::{
+    consistency, Forecast, Fused, Fuser, FusionError, Input, ScanFused, Skip, Step, TimedLocalizer,
+    Tracking, TrackingChange,
+};
 pub use events::ReplayEvent;
 use inputs::{
-    gps_position, heading_from_imu, heading_from_magnetic_field, mount_from_tf, pose2,
-    OdometryTracker, Skip, WheelTracker,
+    gps_position, heading_from_imu, heading_from_magnetic_field, mount_from_tf, planar, pose2,
+    wheel_input,
 };
-use lrf_lines::{LineMap, Localizer, LocalizerError, RelocalizeParams, ScanStage, StageClock};
-use nalgebra::{Matrix3, Point2};
+use lrf_lines::{LineMap, LocalizerError, ScanStage, StageClock};
+use nalgebra::Matrix3;
 use outputs::OutputBag;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::time::Instant;
 pub use summary::ReplaySummary;
 
-/// The paper's four estimator configurations (Fig. 9/10); the default is all sensors,
-/// laser + compass (as `ekf replay`'s).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum Mode {
-    /// Prediction only: dead reckoning.
-    Odometry,
-    /// Prediction + compass.
-    Compass,
-    /// Prediction + laser lines.
-    Laser,
-    /// Prediction + laser lines + compass.
-    #[default]
-    LaserCompass,
-}
-
-impl Mode {
-    /// All four, in the paper's order.
-    pub const ALL: [Mode; 4] = [
-        Mode::Odometry,
-        Mode::Compass,
-        Mode::Laser,
-        Mode::LaserCompass,
-    ];
-
-    /// The name used on the command line and in summaries.
-    pub fn name(self) -> &'static str {
-        match self {
-            Mode::Odometry => "odometry",
-            Mode::Compass => "compass",
-            Mode::Laser => "laser",
-            Mode::LaserCompass => "laser+compass",
-        }
-    }
-
-    /// Whether the mode fuses the compass.
-    pub fn uses_compass(self) -> bool {
-        matches!(self, Mode::Compass | Mode::LaserCompass)
-    }
-
-    /// Whether the mode fuses laser lines.
-    pub fn uses_laser(self) -> bool {
-        matches!(self, Mode::Laser | Mode::LaserCompass)
-    }
-}
+pub use ekf_fusion::Mode;
 
 /// What to replay and where to write. The default is `ekf replay LOG` with no flags:
 /// laser + compass, a first-scan map, the configured initial pose, no files written.
@@ -97,7 +55,7 @@ pub struct ReplayOptions {
     /// Start at the first reference pose instead of `config.initial`.
     pub init_from_truth: bool,
     /// Global localization: no initial pose; the map is searched from the first scans
-    /// ([`tracking`]) and the filter starts where the search locks on. Needs a map.
+    /// ([`ekf_fusion::tracking`]) and the filter starts where the search locks on. Needs a map.
     pub global: bool,
     /// Output bag.
     pub out_mcap: Option<PathBuf>,
@@ -202,6 +160,15 @@ pub enum ReplayError {
     },
 }
 
+impl From<FusionError> for ReplayError {
+    fn from(e: FusionError) -> Self {
+        match e {
+            FusionError::Localizer(e) => Self::Filter(e),
+            FusionError::TrackingNeedsMap => Self::GlobalNeedsMap,
+        }
+    }
+}
+
 /// The results of a replay.
 #[derive(Debug)]
 pub struct ReplayOutcome {
@@ -240,6 +207,10 @@ struct StageTimer {
 }
 
 impl StageClock for StageTimer {
+    fn scan_started(&mut self) {
+        self.last = Instant::now();
+    }
+
     fn stage_done(&mut self, stage: ScanStage) {
         let now = Instant::now();
         let us = now.duration_since(self.last).as_secs_f64() * 1e6;
@@ -365,6 +336,7 @@ pub fn replay(
         use_joints,
         &log_name,
         motion_topic,
+        (config.timing.max_lag * 1e9) as u64,
     )?;
     if topic_type(&t.ground_truth).is_none() {
         // A log without a reference is normal; one whose reference is under another name
@@ -386,11 +358,9 @@ pub fn replay(
         }
     }
     let total: u64 = bag.topics().iter().map(|t| t.message_count).sum();
-    let mut failure = None;
+    let (mut failure, mut read_failure) = (None, None);
     let mut done = 0;
-    let mut order = reorder::Reorder::new((config.timing.max_lag * 1e9) as u64);
-    let mut read_failure = None;
-    'read: for message in bag.messages()? {
+    for message in bag.messages()? {
         let message = match message {
             Ok(m) => m,
             Err(e) => {
@@ -398,26 +368,18 @@ pub fn replay(
                 break;
             }
         };
-        if let Err(late) = order.push(message) {
-            run.too_late(&late);
-        }
-        while let Some((stamp, ready)) = order.pop_ready() {
-            if let Err(e) = run.handle(&ready, stamp) {
-                failure = Some(e);
-                break 'read;
-            }
+        if let Err(e) = run.handle(&message) {
+            failure = Some(e);
+            break;
         }
         done += 1;
         progress(done, total);
     }
     // What was read before the end (or the damage) is fused, in stamp order.
-    while let Some((stamp, ready)) = order.pop().filter(|_| failure.is_none()) {
-        if let Err(e) = run.handle(&ready, stamp) {
-            failure = Some(e);
-        }
+    if failure.is_none() {
+        failure = run.fuse_held().err();
     }
-    let failure = failure.or(read_failure);
-    run.finish(started, failure)
+    run.finish(started, failure.or(read_failure))
 }
 
 /// The laser's mounting pose: `base_frame` → the scan's frame from `/tf_static` when
@@ -505,155 +467,37 @@ pub(crate) fn reference_pose(message: &BagMessage) -> Option<Pose2<f64>> {
 /// What to do about a missing topic the mode cannot do without.
 pub(crate) const TOPIC_HINT: &str = "; name the log's topic in the config's [topics] table";
 
-/// Longest time after the end of the last motion message up to which the state is
-/// brought forward at that message's rate.
-const MAX_EXTRAPOLATION_NS: u64 = 200_000_000;
-
-/// One motion message's step over its whole interval.
-#[derive(Debug, Clone, Copy)]
-enum MotionStep {
-    /// Wheel speeds held over `dt`.
-    Wheels(WheelSpeeds<f64>),
-    /// An odometry pose delta.
-    Odometry(Motion<f64>),
+/// What a held input carries for its report: the channel it came on and its log time
+/// (warnings name the log time; the input is fused at its stamp).
+#[derive(Debug, Clone)]
+pub(crate) struct Tag {
+    channel: Arc<ChannelInfo>,
+    log_time: u64,
 }
 
-impl MotionStep {
-    /// Wheel speeds over the interval `(t0, t1]` that ends at `stamp` (a joint state's)
-    /// and lasts the speeds' `dt`: `(step, t0, t1)`.
-    fn wheels_until(speeds: WheelSpeeds<f64>, stamp: u64) -> (Self, u64, u64) {
-        let t0 = stamp - (speeds.dt * 1e9).round() as u64;
-        (MotionStep::Wheels(speeds), t0, stamp)
-    }
-
-    /// The part of the step after a fraction `1 − f` of its interval has passed.
-    fn part(self, f: f64) -> Self {
-        match self {
-            MotionStep::Wheels(s) => MotionStep::Wheels(WheelSpeeds { dt: s.dt * f, ..s }),
-            MotionStep::Odometry(m) => MotionStep::Odometry(Motion {
-                ds: m.ds * f,
-                dtheta: m.dtheta * f,
-            }),
-        }
-    }
-
-    /// The step per second, for a step over `dt` seconds.
-    fn rate(self, dt: f64) -> MotionRate {
-        match self {
-            MotionStep::Wheels(s) => MotionRate(MotionStep::Wheels(WheelSpeeds { dt: 1.0, ..s })),
-            MotionStep::Odometry(m) => MotionRate(MotionStep::Odometry(Motion {
-                ds: m.ds / dt,
-                dtheta: m.dtheta / dt,
-            })),
-        }
-    }
-}
-
-/// A motion step per second of time.
-#[derive(Debug, Clone, Copy)]
-struct MotionRate(MotionStep);
-
-impl MotionRate {
-    /// The step over `dt` seconds at this rate.
-    fn over(self, dt: f64) -> MotionStep {
-        self.0.part(dt)
-    }
-}
-
-/// The time the filter state refers to, and the rate and end of the last motion step.
-#[derive(Debug, Clone, Copy, Default)]
-struct MotionClock {
-    state_ns: Option<u64>,
-    rate: Option<MotionRate>,
-    /// The end of the last motion step taken (ns): extrapolation at its rate reaches at
-    /// most [`MAX_EXTRAPOLATION_NS`] beyond it.
-    motion_ns: Option<u64>,
-    /// The time of the initial state: motion before it is already in the initial pose (a
-    /// reference pose taken as the start), so only the part of a step after it counts.
-    start_ns: u64,
-}
-
-impl MotionClock {
-    /// A clock whose initial state refers to `start_ns`.
-    fn starting_at(start_ns: u64) -> Self {
-        Self {
-            start_ns,
-            ..Self::default()
-        }
-    }
-
-    /// Takes a motion step over `(t0, t1]` and returns the part of it after the time the
-    /// state already refers to (a scan or heading in between was fused at its own time,
-    /// after a prediction at the previous rate, or the initial state's time); `None` if
-    /// nothing of it is left.
-    fn advance(&mut self, step: MotionStep, t0: u64, t1: u64) -> Option<MotionStep> {
-        if t1 <= self.start_ns {
-            return None;
-        }
-        let start = self.state_ns.map_or(t0, |s| s.max(t0)).max(self.start_ns);
-        self.state_ns = Some(self.state_ns.map_or(t1, |s| s.max(t1)));
-        self.motion_ns = Some(self.motion_ns.map_or(t1, |s| s.max(t1)));
-        self.rate = Some(step.rate((t1 - t0) as f64 * 1e-9));
-        (start < t1).then(|| step.part((t1 - start) as f64 / (t1 - t0) as f64))
-    }
-
-    /// The step that brings the state from its time to `t_ns` at the last motion rate,
-    /// if `t_ns` is later than the state and at most [`MAX_EXTRAPOLATION_NS`] after the
-    /// end of the last motion step; the state then refers to `t_ns`. Later times are left
-    /// to the next motion message (the robot may have stopped). The limit counts from the
-    /// last motion message, not from the last extrapolation: a source that falls silent
-    /// is not carried on at its last rate scan after scan.
-    fn extrapolate(&mut self, t_ns: u64) -> Option<MotionStep> {
-        let (state, rate, motion) = (self.state_ns?, self.rate?, self.motion_ns?);
-        if t_ns <= state || t_ns - motion > MAX_EXTRAPOLATION_NS {
-            return None;
-        }
-        self.state_ns = Some(t_ns);
-        Some(rate.over((t_ns - state) as f64 * 1e-9))
-    }
-}
-
-/// The filter's state predicted ahead of what has been fused: see [`Run::forecast`].
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) struct Forecast {
-    /// The time it refers to (ns): the newest wheel reading predicted through, or
-    /// `fused_ns` if none was.
-    pub t_ns: u64,
-    /// The time of the fused state it was predicted from (ns).
-    pub fused_ns: u64,
-    /// The pose.
-    pub pose: Pose2<f64>,
-    /// Its covariance.
-    pub covariance: Matrix3<f64>,
-}
-
-/// The state of one replay loop: the filter, its outputs and the trackers that turn
-/// messages into filter inputs. `replay` drives it over a log; `ekf live` over messages
-/// it makes from devices and records, so a replay of the recording repeats it exactly.
+/// The state of one replay loop: the time-ordered localizer, its outputs, and the
+/// conversion of messages into its inputs. `replay` drives it over a log; `ekf live` over
+/// messages it makes from devices and records, so a replay of the recording repeats it
+/// exactly.
 pub(crate) struct Run<'a> {
     config: &'a Config,
     log: String,
     mode: Mode,
-    start_ns: u64,
     use_joints: bool,
-    localizer: Localizer,
+    localizer: TimedLocalizer<Tag>,
     out: Option<OutputBag>,
     summary: ReplaySummary,
     poses: sink::PoseSink,
-    clock: MotionClock,
-    wheels: WheelTracker,
-    odometry: OdometryTracker,
     timer: StageTimer,
     map_written: bool,
-    gps_gate: ChiSquareGate<f64>,
-    tracking: tracking::Tracking,
     /// Events and lost scans, if trajectories are kept.
     events: Option<events::EventLog>,
-    consistency: consistency::ConsistencyMonitor,
 }
 
 impl<'a> Run<'a> {
     /// Sets up the filter (laser mount, initial state, map) and creates the outputs.
+    /// Inputs are held back by `max_lag_ns` to be fused in stamp order
+    /// ([`TimedLocalizer`]); 0 fuses each as it comes (for inputs already in order).
     pub(crate) fn start(
         config: &'a Config,
         options: &ReplayOptions,
@@ -661,6 +505,7 @@ impl<'a> Run<'a> {
         use_joints: bool,
         log_name: &str,
         motion_topic: &str,
+        max_lag_ns: u64,
     ) -> Result<Self, ReplayError> {
         let t = &config.topics;
         let mut summary = ReplaySummary {
@@ -671,9 +516,9 @@ impl<'a> Run<'a> {
         };
 
         // Laser mount: tf_static, else the configuration.
-        let mut localizer_config = config.localizer.clone();
+        let mut fusion = config.fusion(options.mode);
         let (mount, source) = laser_mount(preamble, config)?;
-        localizer_config.laser_mount = mount;
+        fusion.localizer.laser_mount = mount;
         summary.laser_mount_source = source.into();
         summary.laser_mount = [mount.x, mount.y, mount.theta];
 
@@ -681,6 +526,11 @@ impl<'a> Run<'a> {
         if options.global && options.map.is_none() {
             return Err(ReplayError::GlobalNeedsMap);
         }
+        fusion.tracking = match (options.global, options.map.is_some()) {
+            (true, _) => Tracking::Global,
+            (false, true) => Tracking::FromInitialPose,
+            (false, false) => Tracking::Off,
+        };
         let (start_ns, initial) = if options.init_from_truth && !options.global {
             let (t0, pose) = preamble
                 .first_reference
@@ -696,18 +546,18 @@ impl<'a> Run<'a> {
         let (sxy, sth) = (config.initial.sigma_xy, config.initial.sigma_theta);
         let p0 = Matrix3::from_diagonal(&nalgebra::Vector3::new(sxy * sxy, sxy * sxy, sth * sth));
 
-        let localizer = match &options.map {
+        let map = match &options.map {
             Some(path) => {
-                let map = load_map(path)?;
                 summary.map = path.display().to_string();
-                Localizer::new(localizer_config, initial, p0, map)?
+                Some(load_map(path)?)
             }
             None => {
                 summary.map = "first scan".into();
-                Localizer::with_first_scan_map(localizer_config, initial, p0)?
+                None
             }
         };
-        summary.map_segments = localizer.map().len();
+        let fuser = Fuser::new(&fusion, initial, p0, start_ns, map)?;
+        summary.map_segments = fuser.localizer().map().len();
 
         let out = options
             .out_mcap
@@ -718,45 +568,30 @@ impl<'a> Run<'a> {
             config,
             log: log_name.to_owned(),
             mode: options.mode,
-            start_ns,
             use_joints,
-            localizer,
+            localizer: TimedLocalizer::new(fuser, max_lag_ns),
             out,
             summary,
             poses: sink::PoseSink::new(options.tum.as_deref(), options.keep_trajectories)?,
-            clock: MotionClock::starting_at(start_ns),
-            wheels: WheelTracker::new(
-                &config.motion.left_joint,
-                &config.motion.right_joint,
-                config.devices.max_wheel_turns_per_s,
-            ),
-            odometry: OdometryTracker::default(),
             timer: StageTimer {
                 last: Instant::now(),
                 stages: Default::default(),
             },
             map_written: false,
-            tracking: if options.global {
-                tracking::Tracking::global()
-            } else {
-                tracking::Tracking::new(options.map.is_some())
-            },
             events: options.keep_trajectories.then(events::EventLog::default),
-            consistency: consistency::ConsistencyMonitor::default(),
-            gps_gate: ChiSquareGate::from_probability(config.gps.gate_probability, 2).map_err(
-                |error| LocalizerError::Config {
-                    group: "gps",
-                    error,
-                },
-            )?,
         };
         if let Some(out) = run.out.as_mut() {
             if options.map.is_some() {
-                out.map(start_ns, run.localizer.map())?;
+                out.map(start_ns, run.localizer.fuser().localizer().map())?;
                 run.map_written = true;
             }
         }
         Ok(run)
+    }
+
+    /// The filter.
+    fn filter(&self) -> &lrf_lines::Localizer {
+        self.localizer.fuser().localizer()
     }
 
     /// The output bag, when there is one (live mode records its raw messages into it).
@@ -765,7 +600,8 @@ impl<'a> Run<'a> {
     }
 
     /// Finishes every output, whatever happened before, and returns the results with
-    /// `failure` (the error that ended the loop, if any).
+    /// `failure` (the error that ended the loop, if any). Inputs still held are not fused:
+    /// [`fuse_held`](Self::fuse_held) does that.
     pub(crate) fn finish(
         self,
         started: Instant,
@@ -777,18 +613,26 @@ impl<'a> Run<'a> {
             out,
             localizer,
             mut summary,
-            tracking,
             events,
             ..
         } = self;
         let events = events.unwrap_or_default();
-        summary.tracking.lost_at_end = tracking.lost_for;
+        let fuser = localizer.fuser();
+        let counts = fuser.counts();
+        summary.motion_steps = counts.motion_steps;
+        summary.lines = counts.lines;
+        summary.compass = counts.compass;
+        summary.gps = counts.positions;
+        summary.tracking = counts.tracking.clone();
+        summary.tracking.lost_at_end = fuser.lost_for();
+        summary.consistency = counts.consistency.clone();
+        summary.too_late = counts.too_late;
         // Finish both outputs, then report the first error.
         let bag_finished = out.map_or(Ok(()), OutputBag::finish);
         let poses = poses.finish()?;
         bag_finished?;
-        summary.map_segments = localizer.map().len();
-        let map = localizer.map().clone();
+        let map = fuser.localizer().map().clone();
+        summary.map_segments = map.len();
         let [ext, mat, upd] = &timer.stages;
         summary.timings = summary::Timings {
             extraction: ext.timing(),
@@ -820,191 +664,161 @@ impl<'a> Run<'a> {
         })
     }
 
-    /// One message, fused at `now` (its header stamp, or its log time; warnings name its
-    /// log time).
-    pub(crate) fn handle(&mut self, message: &BagMessage, now: u64) -> Result<(), ReplayError> {
-        let topic = message.topic();
+    /// One message as it is read: turned into an input and pushed, then every input
+    /// whose turn has come is fused, each at its stamp ([`TimedLocalizer`]).
+    pub(crate) fn handle(&mut self, message: &BagMessage) -> Result<(), ReplayError> {
         *self
             .summary
             .messages_read
-            .entry(topic.to_owned())
+            .entry(message.topic().to_owned())
             .or_default() += 1;
-        let t = &self.config.topics;
-        let is_motion = if self.use_joints {
-            topic == t.joint_states
-        } else {
-            topic == t.odom
+        let Some(input) = self.input(message)? else {
+            return Ok(());
         };
-        if is_motion {
-            self.motion(message, now)
-        } else if topic == t.scan {
-            self.scan(message, now)
-        } else if topic == t.compass && self.mode.uses_compass() {
-            self.compass(message, now)
-        } else if topic == t.fix && self.config.gps.fuse {
-            self.gps(message, now)
-        } else if topic == t.ground_truth {
-            if let Some(pose) = reference_pose(message) {
-                self.poses.reference(StampedPose::new(now, pose));
-            } else {
-                self.summary.warn(
-                    topic,
-                    message.log_time,
-                    "reference pose is not finite or not decodable".into(),
-                );
-            }
-            Ok(())
-        } else {
-            Ok(())
+        let tag = Tag {
+            channel: message.channel.clone(),
+            log_time: message.log_time,
+        };
+        if let Err(late) = self.localizer.push(stamps::stamp_of(message), input, tag) {
+            let (_, tag) = &late.item;
+            self.summary.warn(
+                &tag.channel.topic,
+                tag.log_time,
+                format!(
+                    "stamped {} ns, before {} ns already fused: more than [timing] max_lag \
+                     late, dropped",
+                    late.stamp, late.after
+                ),
+            );
         }
+        while let Some(step) = self.localizer.next_ready(&mut self.timer) {
+            self.report(step?)?;
+        }
+        Ok(())
     }
 
-    fn skip(&mut self, topic: &str, now: u64, skip: Skip) {
-        if skip != Skip::First {
-            self.summary.warn(topic, now, skip.to_string());
+    /// Fuses every input still held, in stamp order (at the end of the log).
+    pub(crate) fn fuse_held(&mut self) -> Result<(), ReplayError> {
+        while let Some(step) = self.localizer.next_held(&mut self.timer) {
+            self.report(step?)?;
         }
+        Ok(())
     }
 
-    fn motion(&mut self, message: &BagMessage, now: u64) -> Result<(), ReplayError> {
+    /// The filter input a message is, if any; a message that cannot be one is named in a
+    /// warning.
+    fn input(&mut self, message: &BagMessage) -> Result<Option<Input>, ReplayError> {
         let topic = message.topic();
-        self.tracking.motion(now);
-        let step = match message.decode()? {
-            AnyMessage::JointState(js) => {
-                let stamp = js.header.stamp.to_nanos().filter(|&s| s > 0).unwrap_or(now);
-                let speeds =
-                    self.wheels
-                        .speeds(stamp, &js)
-                        .map_err(|names| ReplayError::MissingJoints {
+        let t = &self.config.topics;
+        let motion_topic = if self.use_joints {
+            &t.joint_states
+        } else {
+            &t.odom
+        };
+        let uses_compass = self.mode.uses_compass();
+        let converted = if topic == motion_topic {
+            match message.decode()? {
+                AnyMessage::JointState(js) => {
+                    let m = &self.config.motion;
+                    wheel_input(&js, &m.left_joint, &m.right_joint).map_err(|names| {
+                        ReplayError::MissingJoints {
                             log: self.log.clone(),
                             topic: topic.into(),
-                            left: self.config.motion.left_joint.clone(),
-                            right: self.config.motion.right_joint.clone(),
+                            left: m.left_joint.clone(),
+                            right: m.right_joint.clone(),
                             names,
-                        })?;
-                speeds.map(|s| MotionStep::wheels_until(s, stamp))
+                        }
+                    })?
+                }
+                AnyMessage::Odometry(o) => Ok(Input::OdometryPose(planar(&o.pose.pose))),
+                _ => return Ok(None),
             }
-            AnyMessage::Odometry(o) => {
-                let stamp = o.header.stamp.to_nanos().filter(|&s| s > 0).unwrap_or(now);
-                self.odometry
-                    .motion(stamp, &o.pose.pose)
-                    .map(|(m, t0)| (MotionStep::Odometry(m), t0, stamp))
+        } else if topic == t.scan {
+            let AnyMessage::LaserScan(scan) = message.decode()? else {
+                return Ok(None);
+            };
+            Ok(Input::Scan(scan.into_scan()))
+        } else if topic == t.compass && uses_compass {
+            let cal = &self.config.compass_calibration;
+            let heading = match message.decode()? {
+                AnyMessage::Imu(imu) => heading_from_imu(&imu, cal),
+                AnyMessage::MagneticField(m) => heading_from_magnetic_field(&m, cal),
+                _ => return Ok(None),
+            };
+            heading.map(|h| Input::Heading {
+                heading: h.heading,
+                variance: h.variance,
+            })
+        } else if topic == t.fix && self.config.gps.fuse {
+            let AnyMessage::NavSatFix(fix) = message.decode()? else {
+                return Ok(None);
+            };
+            let map_offset = self.config.compass_calibration.map_offset;
+            match gps_position(&fix, &self.config.gps, map_offset) {
+                Ok((x, y, covariance)) => Ok(Input::Position { x, y, covariance }),
+                Err(refused) => {
+                    self.summary
+                        .warn(topic, message.log_time, refused.to_string());
+                    return Ok(None);
+                }
             }
-            _ => return Ok(()),
+        } else if topic == t.ground_truth {
+            match reference_pose(message) {
+                Some(pose) => Ok(Input::Reference(pose)),
+                None => {
+                    self.summary.warn(
+                        topic,
+                        message.log_time,
+                        "reference pose is not finite or not decodable".into(),
+                    );
+                    return Ok(None);
+                }
+            }
+        } else {
+            return Ok(None);
         };
-        match step {
-            Err(skip) => self.skip(topic, message.log_time, skip),
-            Ok((step, t0, t1)) => {
-                if self.apply_motion(step, t0, t1)? {
-                    self.summary.motion_steps += 1;
+        match converted {
+            Ok(input) => Ok(Some(input)),
+            Err(skip) => {
+                self.summary.warn(topic, message.log_time, skip.to_string());
+                Ok(None)
+            }
+        }
+    }
+
+    /// Reports one fused input: the trajectory, the output bag, warnings and events.
+    fn report(&mut self, step: Step<Tag>) -> Result<(), ReplayError> {
+        let now = step.stamp_ns;
+        let Tag { channel, log_time } = &step.tag;
+        match step.fused {
+            Fused::Motion { predicted } => {
+                if predicted {
                     self.record_pose(now)?;
                 }
             }
+            Fused::Skipped(Skip::First) | Fused::BeforeStart => {}
+            Fused::Skipped(skip) => self
+                .summary
+                .warn(&channel.topic, *log_time, skip.to_string()),
+            Fused::Heading { heading, update } => self.heading(now, heading, &update)?,
+            Fused::Position(_) => self.record_pose(now)?,
+            Fused::Scan(fused) => self.scan(now, &fused)?,
+            Fused::ScanRefused(e) => self.summary.warn(&channel.topic, *log_time, e.to_string()),
+            Fused::Reference(pose) => self.poses.reference(StampedPose::new(now, pose)),
+            // A scan in a mode without the laser: the state at its stamp, as a pose.
+            Fused::NotFused if matches!(step.input, Input::Scan(_)) => self.record_pose(now)?,
+            Fused::NotFused => {}
         }
         Ok(())
     }
 
-    /// Predicts over the motion interval `(t0, t1]`, or only its part after the time the
-    /// state already refers to ([`MotionClock::advance`]). Returns whether anything was
-    /// predicted.
-    fn apply_motion(&mut self, step: MotionStep, t0: u64, t1: u64) -> Result<bool, ReplayError> {
-        let Some(part) = self.clock.advance(step, t0, t1) else {
-            return Ok(false);
-        };
-        self.predict(part)?;
-        Ok(true)
-    }
-
-    /// Predicts the filter through one motion step.
-    fn predict(&mut self, step: MotionStep) -> Result<(), ReplayError> {
-        let before = self.localizer.pose();
-        match step {
-            MotionStep::Wheels(s) => self.localizer.predict_wheels(&s)?,
-            MotionStep::Odometry(m) => self.localizer.predict_odometry(&m)?,
-        }
-        if let Some(pending) = self.tracking.verification.as_mut() {
-            pending.moved(&before.inverse().compose(&self.localizer.pose()));
-        }
-        Ok(())
-    }
-
-    /// The state predicted through wheel readings that have not been fused yet
-    /// (`joint_states`, oldest first, each following the last one fused): where the robot
-    /// is at the newest of them, while measurements made before it may still be on their
-    /// way (`ekf live` holds readings back until then). Each reading is predicted as
-    /// fusing it would (paper eqs. 5–9, from the same encoder increments); the filter is
-    /// left as it is. Readings this run would skip are skipped; with odometry as the
-    /// motion source, or nothing to predict from, it is the fused state at its own time.
-    /// `None` until a motion step has been fused: before that the state has no time.
-    pub(crate) fn forecast<'m>(
-        &self,
-        joint_states: impl IntoIterator<Item = &'m JointState>,
-    ) -> Result<Option<Forecast>, ReplayError> {
-        let Some(fused_ns) = self.clock.state_ns else {
-            return Ok(None);
-        };
-        let mut ekf = *self.localizer.ekf();
-        let (mut clock, mut wheels) = (self.clock, self.wheels.clone());
-        let config = self.localizer.config();
-        let mut t_ns = fused_ns;
-        for js in joint_states.into_iter().filter(|_| self.use_joints) {
-            let Some(stamp) = js.header.stamp.to_nanos().filter(|&s| s > 0) else {
-                continue;
-            };
-            let Ok(Ok(speeds)) = wheels.speeds(stamp, js) else {
-                continue;
-            };
-            let (step, t0, t1) = MotionStep::wheels_until(speeds, stamp);
-            if let Some(MotionStep::Wheels(s)) = clock.advance(step, t0, t1) {
-                ekf.predict_wheels(&config.robot, &s, &config.wheel_noise)
-                    .map_err(LocalizerError::Filter)?;
-            }
-            t_ns = t_ns.max(stamp);
-        }
-        Ok(Some(Forecast {
-            t_ns,
-            fused_ns,
-            pose: ekf.pose(),
-            covariance: *ekf.covariance(),
-        }))
-    }
-
-    /// Brings the state to `t_ns` before a scan or heading is fused there
-    /// ([`MotionClock::extrapolate`]).
-    fn catch_up(&mut self, t_ns: u64) -> Result<(), ReplayError> {
-        match self.clock.extrapolate(t_ns) {
-            Some(step) => self.predict(step),
-            None => Ok(()),
-        }
-    }
-
-    fn compass(&mut self, message: &BagMessage, now: u64) -> Result<(), ReplayError> {
-        if now < self.start_ns {
-            return Ok(());
-        }
-        let cal = &self.config.compass_calibration;
-        let (stamp, heading) = match message.decode()? {
-            AnyMessage::Imu(imu) => (imu.header.stamp, heading_from_imu(&imu, cal)),
-            AnyMessage::MagneticField(m) => (m.header.stamp, heading_from_magnetic_field(&m, cal)),
-            _ => return Ok(()),
-        };
-        let h = match heading {
-            Ok(h) => h,
-            Err(skip) => {
-                self.skip(message.topic(), message.log_time, skip);
-                return Ok(());
-            }
-        };
-        self.catch_up(stamp.to_nanos().filter(|&t| t > 0).unwrap_or(now))?;
-        let variance = h.variance.unwrap_or(self.config.localizer.compass.variance);
-        let update = self
-            .localizer
-            .update_compass_with_variance(h.heading, variance)?;
-        let counts = &mut self.summary.compass;
-        if update.outcome.accepted {
-            counts.accepted += 1;
-            counts.recovered += u64::from(update.recovered);
-        } else {
-            counts.rejected += 1;
+    fn heading(
+        &mut self,
+        now: u64,
+        heading: f64,
+        update: &lrf_lines::CompassUpdate,
+    ) -> Result<(), ReplayError> {
+        if !update.outcome.accepted {
             self.mark(now, ReplayEvent::CompassRejected);
         }
         if let Some(out) = self.out.as_mut() {
@@ -1020,7 +834,7 @@ impl<'a> Run<'a> {
                 text,
                 vec![
                     ("nis", format!("{:.4}", update.outcome.nis)),
-                    ("heading_rad", format!("{:.6}", h.heading)),
+                    ("heading_rad", format!("{heading:.6}")),
                     ("rejected_in_a_row", update.rejected_in_a_row.to_string()),
                 ],
             )?;
@@ -1030,340 +844,29 @@ impl<'a> Run<'a> {
         self.record_pose(now)
     }
 
-    /// A GPS fix as a position in the map ([`crate::config::GpsConfig`]).
-    fn gps(&mut self, message: &BagMessage, now: u64) -> Result<(), ReplayError> {
-        if now < self.start_ns {
-            return Ok(());
+    /// A scan's update: the loss monitor's reports, then the map, the markers and the
+    /// scan's diagnostics, then the pose.
+    fn scan(&mut self, now: u64, fused: &ScanFused) -> Result<(), ReplayError> {
+        if fused.lost.is_some() {
+            self.mark(now, ReplayEvent::Lost);
         }
-        let AnyMessage::NavSatFix(fix) = message.decode()? else {
-            return Ok(());
-        };
-        let map_offset = self.config.compass_calibration.map_offset;
-        let (x, y, covariance) = match gps_position(&fix, &self.config.gps, map_offset) {
-            Ok(position) => position,
-            Err(refused) => {
-                self.summary
-                    .warn(message.topic(), message.log_time, refused.to_string());
-                return Ok(());
+        if fused.relocalized.is_some() {
+            self.mark(now, ReplayEvent::Relocalized);
+        }
+        if fused.lost_after {
+            if let Some(log) = self.events.as_mut() {
+                log.lost_scans.push(now);
             }
-        };
-        self.catch_up(
-            fix.header
-                .stamp
-                .to_nanos()
-                .filter(|&t| t > 0)
-                .unwrap_or(now),
-        )?;
-        let outcome = self
-            .localizer
-            .update_position(x, y, covariance, Some(&self.gps_gate))?;
-        if outcome.accepted {
-            self.summary.gps.accepted += 1;
-        } else {
-            self.summary.gps.rejected += 1;
+        }
+        let report = fused.report;
+        if report.rejected + report.refused > 0 {
+            self.mark(now, ReplayEvent::LinesRefused);
+        }
+        if let Some(out) = self.out.as_mut() {
+            let localizer = self.localizer.fuser().localizer();
+            write_scan_outputs(out, now, fused, localizer, &mut self.map_written)?;
         }
         self.record_pose(now)
-    }
-
-    fn scan(&mut self, message: &BagMessage, now: u64) -> Result<(), ReplayError> {
-        self.summary.lines.scans += 1;
-        if now < self.start_ns {
-            return Ok(());
-        }
-        if self.mode.uses_laser() {
-            let AnyMessage::LaserScan(scan) = message.decode()? else {
-                return Ok(());
-            };
-            self.catch_up(
-                scan.header
-                    .stamp
-                    .to_nanos()
-                    .filter(|&t| t > 0)
-                    .unwrap_or(now),
-            )?;
-            self.timer.last = Instant::now();
-            let report = match self
-                .localizer
-                .update_scan_timed(&scan.as_scan(), &mut self.timer)
-            {
-                Ok(r) => r,
-                Err(LocalizerError::Extraction(e)) => {
-                    self.summary
-                        .warn(message.topic(), message.log_time, e.to_string());
-                    return Ok(());
-                }
-                Err(e) => return Err(e.into()),
-            };
-            let gap = self.tracking.gap_before_scan(now);
-            let report = self.check_tracking(&scan, now, gap, report)?;
-            if self.tracking.lost_for > 0 {
-                self.summary.tracking.scans_lost += 1;
-                if let Some(log) = self.events.as_mut() {
-                    log.lost_scans.push(now);
-                }
-            }
-            self.check_consistency(now)?;
-            let l = &mut self.summary.lines;
-            l.scans_used += 1;
-            l.extracted += report.extracted as u64;
-            l.matched += report.matched as u64;
-            l.rejected += report.rejected as u64;
-            l.fused += report.fused as u64;
-            l.refused += report.refused as u64;
-            if report.rejected + report.refused > 0 {
-                self.mark(now, ReplayEvent::LinesRefused);
-            }
-            if let Some(out) = self.out.as_mut() {
-                if report.map_built && !self.map_written {
-                    out.map(now, self.localizer.map())?;
-                    self.map_written = true;
-                }
-                let fused: Vec<usize> = self
-                    .localizer
-                    .last_fusions()
-                    .iter()
-                    .filter(|f| f.accepted)
-                    .map(|f| f.observed)
-                    .collect();
-                let nis: Vec<String> = self
-                    .localizer
-                    .last_fusions()
-                    .iter()
-                    .map(|f| format!("{:.3}", f.nis))
-                    .collect();
-                out.scan_markers(
-                    now,
-                    &self.localizer.sensor_pose(),
-                    self.localizer.last_lines(),
-                    &fused,
-                    &self.localizer.pose(),
-                    self.localizer.covariance(),
-                )?;
-                let rejections: Vec<String> = self
-                    .localizer
-                    .last_matches()
-                    .rejections()
-                    .iter()
-                    .map(|r| format!("line {}: {}", r.observed, r.reason))
-                    .collect();
-                let values = vec![
-                    ("lines_extracted", report.extracted.to_string()),
-                    ("lines_matched", report.matched.to_string()),
-                    ("lines_rejected", report.rejected.to_string()),
-                    ("lines_fused", report.fused.to_string()),
-                    ("lines_refused", report.refused.to_string()),
-                    ("nis", nis.join(" ")),
-                    ("rejections", rejections.join("; ")),
-                ];
-                let level =
-                    u8::from(report.extracted > 0 && report.fused == 0 && !report.map_built);
-                out.diagnostics(
-                    now,
-                    "ekf/scan",
-                    level,
-                    if level == 0 { "ok" } else { "no line fused" },
-                    values,
-                )?;
-            }
-        }
-        self.record_pose(now)
-    }
-
-    /// The consistency monitor after a scan's update ([`consistency`]): one
-    /// `/ekf/diagnostics` message when an over-confident stretch starts.
-    fn check_consistency(&mut self, now: u64) -> Result<(), ReplayError> {
-        let fused = self
-            .localizer
-            .last_fusions()
-            .iter()
-            .filter(|f| f.accepted)
-            .map(|f| f.nis);
-        let started = self.consistency.scan(fused, &mut self.summary.consistency);
-        if let (true, Some(out)) = (started, self.out.as_mut()) {
-            out.diagnostics(
-                now,
-                "ekf/consistency",
-                1,
-                "over-confident: the lines' innovations are larger than the covariance allows",
-                vec![
-                    ("window_scans", consistency::WINDOW_SCANS.to_string()),
-                    (
-                        "band_probability",
-                        consistency::BAND_PROBABILITY.to_string(),
-                    ),
-                ],
-            )?;
-        }
-        Ok(())
-    }
-
-    /// The loss monitor after a scan's update ([`tracking`]): on a motion gap, while lost,
-    /// or while the heading is less certain than the search resolves, searches the map
-    /// and restarts the filter at a verified pose. A search made while lost, with
-    /// odometry since the scan before, only nominates candidates, which the next scans
-    /// judge ([`verification`]); after a motion gap, or for a check of a tracked
-    /// estimate, the search's own scan decides. Returns the report of the update that
-    /// stands.
-    fn check_tracking(
-        &mut self,
-        scan: &crate::ros2::sensor_msgs::LaserScan,
-        now: u64,
-        gap: bool,
-        report: lrf_lines::ScanReport,
-    ) -> Result<lrf_lines::ScanReport, ReplayError> {
-        if !self.tracking.enabled {
-            return Ok(report);
-        }
-        let lost_now = self.tracking.scan_fused(report.extracted, report.fused);
-        let params = RelocalizeParams::default();
-        let uncertain = tracking::uncertain(self.localizer.covariance(), &params);
-        if gap {
-            self.tracking.verification = None;
-        }
-        if self.tracking.lost_for == 0 {
-            if gap || lost_now {
-                self.tracking.declared = true;
-                let counts = &mut self.summary.tracking;
-                counts.losses += 1;
-                counts.motion_gaps += u64::from(gap);
-                self.mark(now, ReplayEvent::Lost);
-                let why = if gap {
-                    "lost: the motion source was silent since the last scan (a motion gap)"
-                } else {
-                    "lost: scans in a row with lines and none fused"
-                };
-                self.tracking_status(now, 2, why)?;
-            } else if !uncertain {
-                return Ok(report);
-            }
-        } else if !gap && !self.tracking.unlocked && report.fused >= tracking::MIN_VERIFIED_LINES {
-            // Regained by tracking alone.
-            self.tracking.lost_for = 0;
-            self.tracking.verification = None;
-            if std::mem::replace(&mut self.tracking.declared, false) {
-                self.tracking_status(now, 0, "tracking again: the scan's lines fused")?;
-            }
-            return Ok(report);
-        }
-        let verify = !gap && (lost_now || self.tracking.lost_for > 0);
-        if let Some(mut pending) = self.tracking.verification.take() {
-            pending.add_scan(&self.localizer.fit_poses(&pending.poses(), &params));
-            if !pending.done() {
-                self.tracking.verification = Some(pending);
-                self.tracking.lost_for += 1;
-                return Ok(report);
-            }
-            let Some(won) = pending.verdict(&params) else {
-                self.summary.tracking.refused += 1;
-                self.tracking.lost_for += 1;
-                return Ok(report);
-            };
-            return self.restart_at(scan, now, won, &params, report);
-        }
-        let pose = self.localizer.pose();
-        let cov = self.localizer.covariance();
-        let window = self
-            .tracking
-            .window(Point2::new(pose.x, pose.y), cov[(0, 0)] + cov[(1, 1)]);
-        self.summary.tracking.searches += 1;
-        let found = self.localizer.relocalize(&window, &params);
-        if verify {
-            match found.filter(|f| f.explains_scan(&params)) {
-                Some(found) => {
-                    self.tracking.verification = Some(verification::Verification::start(&found))
-                }
-                None => self.summary.tracking.refused += 1,
-            }
-            self.tracking.lost_for += 1;
-            return Ok(report);
-        }
-        let Some(found) = found.filter(|r| r.is_unambiguous(&params)) else {
-            self.summary.tracking.refused += 1;
-            self.tracking.lost_for += 1;
-            return Ok(report);
-        };
-        let won = verification::Verified {
-            pose: found.best.pose,
-            inliers: found.best.inliers,
-            score: found.best.score,
-            runner_up: found.runner_up,
-        };
-        self.restart_at(scan, now, won, &params, report)
-    }
-
-    /// Restarts the filter at the pose a search found (`won`) unless the estimate is
-    /// already there, and fuses the scan again: kept if at least
-    /// [`tracking::MIN_VERIFIED_LINES`] lines fuse, otherwise the filter is put back.
-    /// Returns the report of the update that stands.
-    fn restart_at(
-        &mut self,
-        scan: &crate::ros2::sensor_msgs::LaserScan,
-        now: u64,
-        won: verification::Verified,
-        params: &RelocalizeParams,
-        report: lrf_lines::ScanReport,
-    ) -> Result<lrf_lines::ScanReport, ReplayError> {
-        let best = won.pose;
-        if !params.elsewhere(&best, &self.localizer.pose()) {
-            // The estimate is where the search puts it.
-            self.tracking.locked(&mut self.summary.tracking);
-            return Ok(report);
-        }
-        let saved = self.localizer.clone();
-        self.localizer
-            .reset(best, tracking::restart_covariance(params))?;
-        let again = self.localizer.update_scan(&scan.as_scan());
-        let verified = match again {
-            Ok(r) if r.fused >= tracking::MIN_VERIFIED_LINES => Some(r),
-            _ => None,
-        };
-        let counts = &mut self.summary.tracking;
-        match verified {
-            Some(r) => {
-                counts.relocalizations += 1;
-                if counts.first_relocalizations_ns.len() < 10 {
-                    counts.first_relocalizations_ns.push(now);
-                }
-                self.tracking.locked(counts);
-                self.mark(now, ReplayEvent::Relocalized);
-                if let Some(out) = self.out.as_mut() {
-                    out.diagnostics(
-                        now,
-                        "ekf/relocalization",
-                        1,
-                        "relocalized: the filter restarted at the pose the map search found",
-                        vec![
-                            ("x", format!("{:.3}", best.x)),
-                            ("y", format!("{:.3}", best.y)),
-                            ("theta", format!("{:.4}", best.theta)),
-                            ("inliers", won.inliers.to_string()),
-                            ("score_m", format!("{:.2}", won.score)),
-                            ("runner_up_m", format!("{:.2}", won.runner_up)),
-                        ],
-                    )?;
-                }
-                Ok(r)
-            }
-            None => {
-                self.localizer = saved;
-                counts.refused += 1;
-                self.tracking.lost_for += 1;
-                Ok(report)
-            }
-        }
-    }
-
-    /// A message that came after the lag: counted and named, not fused.
-    fn too_late(&mut self, late: &reorder::TooLate) {
-        self.summary.too_late += 1;
-        self.summary.warn(
-            &late.topic,
-            late.log_time,
-            format!(
-                "stamped {} ns, before {} ns already fused: more than [timing] max_lag late, dropped",
-                late.stamp, late.after
-            ),
-        );
     }
 
     /// An `ekf/tracking` diagnostics message: a loss (level 2) or its end (level 0).
@@ -1374,27 +877,145 @@ impl<'a> Run<'a> {
         }
     }
 
-    fn tracking_status(&mut self, now: u64, level: u8, message: &str) -> Result<(), ReplayError> {
-        let Some(out) = self.out.as_mut() else {
-            return Ok(());
-        };
-        let values = vec![
-            ("scans_lost", self.summary.tracking.scans_lost.to_string()),
-            ("losses", self.summary.tracking.losses.to_string()),
-        ];
-        Ok(out.diagnostics(now, "ekf/tracking", level, message, values)?)
-    }
-
     /// A pose for the TUM trajectory and the output bag.
     fn record_pose(&mut self, now: u64) -> Result<(), ReplayError> {
-        let pose = self.localizer.pose();
+        let filter = self.filter();
+        let (pose, covariance) = (filter.pose(), *filter.covariance());
         self.poses
-            .estimate(StampedPose::new(now, pose), self.localizer.covariance())?;
+            .estimate(StampedPose::new(now, pose), &covariance)?;
         if let Some(out) = self.out.as_mut() {
-            out.pose(now, &pose, self.localizer.covariance())?;
+            out.pose(now, &pose, &covariance)?;
         }
         Ok(())
     }
+
+    /// The pose now: the fused state predicted through the inputs held and then through
+    /// `joint_states` (wheel readings not handed to the run yet, oldest first), as fusing
+    /// them would (paper eqs. 5–9, from the same encoder increments); the filter is left as
+    /// it is ([`TimedLocalizer::pose_now`]). `None` until a motion step has been fused.
+    pub(crate) fn forecast<'m>(
+        &self,
+        joint_states: impl IntoIterator<Item = &'m JointState>,
+    ) -> Result<Option<Forecast>, ReplayError> {
+        let m = &self.config.motion;
+        let inputs: Vec<(u64, Input)> = joint_states
+            .into_iter()
+            .filter(|_| self.use_joints)
+            .filter_map(|js| {
+                let stamp = js.header.stamp.to_nanos().filter(|&s| s > 0)?;
+                let input = wheel_input(js, &m.left_joint, &m.right_joint).ok()?.ok()?;
+                Some((stamp, input))
+            })
+            .collect();
+        let more = inputs.iter().map(|(stamp, input)| (*stamp, input));
+        Ok(self.localizer.pose_now(more)?)
+    }
+}
+
+/// The output bag's record of one scan's update, in the order a reader sees them: the
+/// loss monitor's diagnostics, the consistency warning, the map (when the scan built
+/// it), the scan's markers and its diagnostics.
+fn write_scan_outputs(
+    out: &mut OutputBag,
+    now: u64,
+    fused: &ScanFused,
+    localizer: &lrf_lines::Localizer,
+    map_written: &mut bool,
+) -> Result<(), ReplayError> {
+    let tracking_status = |out: &mut OutputBag, level, message: &str, c: &TrackingChange| {
+        let values = vec![
+            ("scans_lost", c.scans_lost.to_string()),
+            ("losses", c.losses.to_string()),
+        ];
+        out.diagnostics(now, "ekf/tracking", level, message, values)
+    };
+    if let Some(lost) = &fused.lost {
+        let why = if lost.motion_gap {
+            "lost: the motion source was silent since the last scan (a motion gap)"
+        } else {
+            "lost: scans in a row with lines and none fused"
+        };
+        tracking_status(out, 2, why, lost)?;
+    }
+    if let Some(regained) = &fused.regained {
+        tracking_status(out, 0, "tracking again: the scan's lines fused", regained)?;
+    }
+    if let Some(won) = &fused.relocalized {
+        let best = won.pose;
+        out.diagnostics(
+            now,
+            "ekf/relocalization",
+            1,
+            "relocalized: the filter restarted at the pose the map search found",
+            vec![
+                ("x", format!("{:.3}", best.x)),
+                ("y", format!("{:.3}", best.y)),
+                ("theta", format!("{:.4}", best.theta)),
+                ("inliers", won.inliers.to_string()),
+                ("score_m", format!("{:.2}", won.score)),
+                ("runner_up_m", format!("{:.2}", won.runner_up)),
+            ],
+        )?;
+    }
+    if fused.over_confident {
+        out.diagnostics(
+            now,
+            "ekf/consistency",
+            1,
+            "over-confident: the lines' innovations are larger than the covariance allows",
+            vec![
+                ("window_scans", consistency::WINDOW_SCANS.to_string()),
+                (
+                    "band_probability",
+                    consistency::BAND_PROBABILITY.to_string(),
+                ),
+            ],
+        )?;
+    }
+    let report = fused.report;
+    if report.map_built && !*map_written {
+        out.map(now, localizer.map())?;
+        *map_written = true;
+    }
+    let fusions = localizer.last_fusions();
+    let accepted: Vec<usize> = fusions
+        .iter()
+        .filter(|f| f.accepted)
+        .map(|f| f.observed)
+        .collect();
+    let nis: Vec<String> = fusions.iter().map(|f| format!("{:.3}", f.nis)).collect();
+    out.scan_markers(
+        now,
+        &localizer.sensor_pose(),
+        localizer.last_lines(),
+        &accepted,
+        &localizer.pose(),
+        localizer.covariance(),
+    )?;
+    let rejections: Vec<String> = localizer
+        .last_matches()
+        .rejections()
+        .iter()
+        .map(|r| format!("line {}: {}", r.observed, r.reason))
+        .collect();
+    let values = vec![
+        ("lines_extracted", report.extracted.to_string()),
+        ("lines_matched", report.matched.to_string()),
+        ("lines_rejected", report.rejected.to_string()),
+        ("lines_fused", report.fused.to_string()),
+        ("lines_refused", report.refused.to_string()),
+        ("nis", nis.join(" ")),
+        ("rejections", rejections.join("; ")),
+    ];
+    let level = u8::from(report.extracted > 0 && report.fused == 0 && !report.map_built);
+    out.diagnostics(
+        now,
+        "ekf/scan",
+        level,
+        if level == 0 { "ok" } else { "no line fused" },
+        values,
+    )?;
+    Ok(())
 }
 
 #[cfg(test)]
@@ -1420,7 +1041,7 @@ mod tests {
             first_reference: None,
         };
         let t = &config.topics.joint_states;
-        Run::start(config, &options, &preamble, true, "test", t).unwrap()
+        Run::start(config, &options, &preamble, true, "test", t, 0).unwrap()
     }
 
     fn feed<M: RosMessage + Stamped>(
@@ -1430,33 +1051,7 @@ mod tests {
         m: &M,
     ) {
         let message = recorder.record(None, topic, m).unwrap();
-        run.handle(&message, message.log_time).unwrap();
-    }
-
-    #[test]
-    fn extrapolation_reaches_only_shortly_past_the_last_motion_step() {
-        const MS: u64 = 1_000_000;
-        let mut clock = MotionClock::default();
-        let step = MotionStep::Odometry(Motion {
-            ds: 0.1,
-            dtheta: 0.02,
-        });
-        // A step of 0.1 m over 100 ms, then scans 50, 150 and 250 ms after it ends.
-        assert!(clock.advance(step, 1000 * MS, 1100 * MS).is_some());
-        let ds = |s: Option<MotionStep>| match s {
-            Some(MotionStep::Odometry(m)) => Some((m.ds * 1e6).round() / 1e6),
-            _ => None,
-        };
-        assert_eq!(ds(clock.extrapolate(1150 * MS)), Some(0.05));
-        assert_eq!(ds(clock.extrapolate(1150 * MS)), None, "already there");
-        assert_eq!(ds(clock.extrapolate(1250 * MS)), Some(0.1));
-        assert_eq!(
-            ds(clock.extrapolate(1350 * MS)),
-            None,
-            "250 ms after the last motion message: not carried on"
-        );
-        // The next message's step counts only after the time the state refers to.
-        assert_eq!(ds(clock.advance(step, 1200 * MS, 1300 * MS)), Some(0.05));
+        run.handle(&message).unwrap();
     }
 
     #[test]
@@ -1488,19 +1083,19 @@ mod tests {
         for j in &joints[2..] {
             feed(&mut all, &mut recorder, topic, j);
         }
-        assert_eq!(fused.summary.compass.accepted, 1);
-        let before = *fused.localizer.ekf();
+        assert_eq!(fused.localizer.fuser().counts().compass.accepted, 1);
+        let before = *fused.filter().ekf();
         let forecast = fused.forecast(&joints[2..]).unwrap().unwrap();
 
         assert_eq!(
-            *fused.localizer.ekf(),
+            *fused.filter().ekf(),
             before,
             "the filter is left as it was"
         );
         assert_eq!(forecast.fused_ns, 1_150_000_000);
         assert_eq!(forecast.t_ns, 1_500_000_000);
-        assert_eq!(forecast.pose, all.localizer.pose());
-        assert_eq!(forecast.covariance, *all.localizer.covariance());
+        assert_eq!(forecast.pose, all.filter().pose());
+        assert_eq!(forecast.covariance, *all.filter().covariance());
         assert!(
             forecast.pose.theta > before.pose().theta + 0.01,
             "it turned"

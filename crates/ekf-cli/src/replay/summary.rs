@@ -84,45 +84,7 @@ pub struct Timings {
     pub update: StageTiming,
 }
 
-/// Counts of the laser pipeline.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
-pub struct LineCounts {
-    /// Scans read.
-    pub scans: u64,
-    /// Scans used for an update (0 in the modes without laser).
-    pub scans_used: u64,
-    /// Lines extracted.
-    pub extracted: u64,
-    /// Lines matched to the map (passed gate and overlap).
-    pub matched: u64,
-    /// Lines not matched (outside the gate, no overlap, wall taken).
-    pub rejected: u64,
-    /// Matched lines fused.
-    pub fused: u64,
-    /// Matched lines refused by the re-evaluated gate.
-    pub refused: u64,
-}
-
-/// Counts of a gated measurement's updates (GPS fixes).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
-pub struct GatedCounts {
-    /// Measurements fused.
-    pub accepted: u64,
-    /// Measurements rejected by the chi-square gate.
-    pub rejected: u64,
-}
-
-/// Counts of the compass headings.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
-pub struct CompassCounts {
-    /// Headings fused.
-    pub accepted: u64,
-    /// Headings rejected by the chi-square gate.
-    pub rejected: u64,
-    /// Of those fused, the ones that failed the gate and were fused to end a gate
-    /// lock-out (`CompassConfig::recover_after`).
-    pub recovered: u64,
-}
+pub use ekf_fusion::{CompassCounts, GatedCounts, LineCounts};
 
 /// Accuracy against the log's reference (`evo`'s APE without alignment).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -173,7 +135,7 @@ pub struct ReplaySummary {
     pub laser_mount: [f64; 3],
     /// `config` or `tf_static`.
     pub laser_mount_source: String,
-    /// Messages read per topic.
+    /// Messages read per topic, those dropped as too late included.
     pub messages_read: BTreeMap<String, u64>,
     /// Motion steps predicted.
     pub motion_steps: u64,
@@ -185,18 +147,18 @@ pub struct ReplaySummary {
     pub compass: CompassCounts,
     /// GPS fix counts (both 0 unless `gps.fuse`).
     pub gps: GatedCounts,
-    /// Losses and relocalizations (`replay::tracking`).
-    pub tracking: super::tracking::TrackingCounts,
-    /// The laser innovations' consistency (`replay::consistency`).
-    pub consistency: super::consistency::ConsistencyCounts,
+    /// Losses and relocalizations ([`ekf_fusion::tracking`]).
+    pub tracking: ekf_fusion::tracking::TrackingCounts,
+    /// The laser innovations' consistency ([`ekf_fusion::consistency`]).
+    pub consistency: ekf_fusion::consistency::ConsistencyCounts,
     /// Per-stage timings of the scan updates.
     pub timings: Timings,
     /// Wall-clock time of the replay (s).
     pub wall_time_s: f64,
     /// Messages skipped, in total.
     pub warning_count: u64,
-    /// Of those, messages stamped before one already fused, more than `[timing] max_lag`
-    /// late (`replay::reorder`).
+    /// Of those, inputs stamped before one already fused, more than `[timing] max_lag`
+    /// late ([`ekf_fusion::TimedLocalizer`]).
     pub too_late: u64,
     /// The first skipped messages with their reasons (at most 20).
     pub warnings: Vec<Warning>,

@@ -62,6 +62,18 @@ impl LaserScan {
             ranges: &self.ranges,
         }
     }
+
+    /// This scan as the owned scan the time-ordered localizer holds
+    /// ([`ekf_fusion::Input::Scan`]), the same beam geometry as [`as_scan`](Self::as_scan).
+    pub fn into_scan(self) -> ekf_fusion::Scan {
+        ekf_fusion::Scan {
+            angle_min: f64::from(self.angle_min),
+            angle_increment: f64::from(self.angle_increment),
+            range_min: f64::from(self.range_min),
+            range_max: f64::from(self.range_max),
+            ranges: self.ranges,
+        }
+    }
 }
 
 /// `sensor_msgs/msg/Imu`: orientation, angular velocity and linear acceleration, each with a

@@ -84,8 +84,11 @@ pub enum ScanStage {
     Update,
 }
 
-/// Told when each stage of a scan update ends; `()` ignores it.
+/// Told when a scan update starts and when each of its stages ends; `()` ignores it.
 pub trait StageClock {
+    /// A scan update is starting (its first stage starts now).
+    fn scan_started(&mut self) {}
+
     /// `stage` has just finished.
     fn stage_done(&mut self, stage: ScanStage);
 }
@@ -443,6 +446,7 @@ impl Localizer {
         scan: &LaserScan<'_>,
         clock: &mut impl StageClock,
     ) -> Result<ScanReport, LocalizerError> {
+        clock.scan_started();
         self.fusions.clear();
         let extracted = self.extractor.extract(scan, &mut self.lines);
         clock.stage_done(ScanStage::Extraction);

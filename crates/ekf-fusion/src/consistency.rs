@@ -11,12 +11,13 @@
 //! 2-dof gate before it was fused, which cuts off large values, so a window above the
 //! band is far outside it.
 //!
-//! The monitor reports (the replay summary, and one `/ekf/diagnostics` message at the
-//! start of each over-confident stretch); it does not change the filter.
+//! The monitor reports (the counts, and [`crate::ScanFused::over_confident`] at the start
+//! of each over-confident stretch, which `ekf replay` turns into one `/ekf/diagnostics`
+//! message); it does not change the filter.
 
+use alloc::collections::VecDeque;
+use alloc::vec::Vec;
 use ekf_core::chi_square_quantile;
-use serde::Serialize;
-use std::collections::VecDeque;
 
 /// Scans with fused lines in the window.
 pub const WINDOW_SCANS: usize = 20;
@@ -24,8 +25,9 @@ pub const WINDOW_SCANS: usize = 20;
 /// The window's NIS is over-confident above this quantile of its chi-square distribution.
 pub const BAND_PROBABILITY: f64 = 0.999;
 
-/// What the monitor saw over a replay.
-#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+/// What the monitor saw over a run.
+#[derive(Debug, Clone, Default, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct ConsistencyCounts {
     /// Scans that fused lines.
     pub scans: u64,

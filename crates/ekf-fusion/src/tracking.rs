@@ -33,7 +33,7 @@
 //!
 //! While lost with odometry since the scan before, the search only nominates: its best
 //! poses are carried by the odometry over the next scans and the one that explains those
-//! scans clearly better than the others wins ([`super::verification`]). After a motion
+//! scans clearly better than the others wins ([`crate::verification`]). After a motion
 //! gap there is no odometry to carry them, and a check of a tracked estimate starts from
 //! a pose the filter still trusts: there the search's own scan decides, its best pose
 //! taken only when it wins clearly over every pose elsewhere
@@ -42,13 +42,14 @@
 //! Either way, once the filter is restarted at the chosen pose, the scan's lines must
 //! fuse at least [`MIN_VERIFIED_LINES`] of them; otherwise the filter is put back as it
 //! was. A relocalization within [`RelocalizeParams::distinct_distance`] and
-//! [`RelocalizeParams::distinct_angle`] of the estimate changes nothing. Every loss and
-//! its end are reported in `/ekf/diagnostics` (`ekf/tracking`), every relocalization too
-//! (`ekf/relocalization`), and the summary counts the scans spent lost.
+//! [`RelocalizeParams::distinct_angle`] of the estimate changes nothing. Every loss, its
+//! end and every relocalization are reported with the scan ([`crate::ScanFused`]; `ekf
+//! replay` writes them to `/ekf/diagnostics` as `ekf/tracking` and
+//! `ekf/relocalization`), and the counts include the scans spent lost.
 
+use alloc::vec::Vec;
 use lrf_lines::{RelocalizeParams, SearchWindow};
 use nalgebra::{Matrix3, Point2};
-use serde::Serialize;
 
 /// Scans in a row with lines but none fused before the filter counts as lost.
 pub const LOST_AFTER_SCANS: u32 = 3;
@@ -70,11 +71,12 @@ pub fn restart_covariance(params: &RelocalizeParams) -> Matrix3<f64> {
 /// Whether the filter's heading (covariance `p`) is less certain than the search
 /// resolves: `σ_θ > params.angle_tolerance`.
 pub fn uncertain(p: &Matrix3<f64>, params: &RelocalizeParams) -> bool {
-    p[(2, 2)].max(0.0).sqrt() > params.angle_tolerance
+    libm::sqrt(p[(2, 2)].max(0.0)) > params.angle_tolerance
 }
 
-/// Losses and relocalizations of a replay, for its summary.
-#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+/// Losses and relocalizations of a run, for its summary.
+#[derive(Debug, Clone, Default, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct TrackingCounts {
     /// Scans that began a loss (a motion gap, or [`LOST_AFTER_SCANS`] unfused scans).
     pub losses: u64,
@@ -93,7 +95,7 @@ pub struct TrackingCounts {
     pub scans_lost: u64,
     /// Scans the filter had been lost for when the log ended (0: tracking).
     pub lost_at_end: u32,
-    /// Log times (ns) of the first relocalizations.
+    /// Stamps (ns) of the first relocalizations.
     pub first_relocalizations_ns: Vec<u64>,
     /// With global localization, the scan (1-based) at which the search locked on.
     pub locked_on_scan: Option<u64>,
@@ -122,7 +124,7 @@ pub struct Tracking {
     /// Started without a pose (global localization) and not yet locked on.
     pub unlocked: bool,
     /// A search's candidates being judged over the next scans.
-    pub verification: Option<super::verification::Verification>,
+    pub verification: Option<crate::verification::Verification>,
     /// Laser scans seen.
     pub scans: u64,
     /// Running mean of the motion source's message intervals (ns).
@@ -183,7 +185,7 @@ impl Tracking {
         if !self.motion_seen {
             return false;
         }
-        let covered = std::mem::replace(&mut self.motion_since_scan, false);
+        let covered = core::mem::replace(&mut self.motion_since_scan, false);
         self.intervals += 1;
         self.covered += u64::from(covered);
         let rarely_covers = 4 * self.covered < self.intervals;
@@ -214,7 +216,7 @@ impl Tracking {
         }
         SearchWindow {
             center,
-            radius: 3.0 * var_xy.max(0.0).sqrt() + 2.0 * f64::from(1 + self.lost_for),
+            radius: 3.0 * libm::sqrt(var_xy.max(0.0)) + 2.0 * f64::from(1 + self.lost_for),
         }
     }
 }

@@ -16,6 +16,7 @@
 //! A motion gap in between ends the verification: the odometry no longer says where the
 //! candidates went.
 
+use alloc::vec::Vec;
 use ekf_core::Pose2;
 use lrf_lines::{PoseFits, Relocalization, RelocalizeParams};
 

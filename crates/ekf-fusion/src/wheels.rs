@@ -1,0 +1,127 @@
+//! Motion from successive readings: wheel speeds from encoder angles or wheel velocities,
+//! and motion steps from odometry poses.
+
+use crate::Skip;
+use ekf_core::{Motion, Pose2, WheelSpeeds};
+
+/// Stamp jitter allowed when an encoder increment is judged against the fastest the
+/// wheels can turn (s): a reading stamped when it was received can be late by a
+/// scheduling delay, and the next one then comes soon after it with a normal increment.
+const STAMP_JITTER_S: f64 = 0.05;
+
+/// Wheel speeds from successive wheel readings: the difference of the encoder angles over
+/// the stamp difference (the encoder increment), or the velocities for a source with no
+/// angles. A wheel that would have turned faster than the robot's wheels can is a broken
+/// reading (an encoder spike or jump, a counter reset): it is skipped, and the next
+/// increment is taken from it, so a spike costs two readings and a jump one.
+#[derive(Debug, Clone)]
+pub struct WheelTracker {
+    /// Fastest plausible wheel speed (rad/s).
+    max_speed: f64,
+    previous: Option<(u64, f64, f64)>,
+}
+
+impl WheelTracker {
+    /// Tracks wheels that turn at most `max_turns_per_s` (the configuration's
+    /// `devices.max_wheel_turns_per_s`).
+    pub fn new(max_turns_per_s: f64) -> Self {
+        Self {
+            max_speed: max_turns_per_s * core::f64::consts::TAU,
+            previous: None,
+        }
+    }
+
+    /// Wheel speeds over the interval from the previous reading to encoder angles
+    /// `(left, right)` (rad) at `stamp_ns`: the increments over the stamp difference.
+    pub fn angles(
+        &mut self,
+        stamp_ns: u64,
+        left: f64,
+        right: f64,
+    ) -> Result<WheelSpeeds<f64>, Skip> {
+        if !(left.is_finite() && right.is_finite()) {
+            return Err(Skip::NonFinite { field: "position" });
+        }
+        let previous = self.previous.replace((stamp_ns, left, right));
+        let Some((t0, l0, r0)) = previous else {
+            return Err(Skip::First);
+        };
+        if stamp_ns <= t0 {
+            self.previous = previous;
+            return Err(Skip::TimeNotIncreasing {
+                previous_ns: t0,
+                stamp_ns,
+            });
+        }
+        // The encoder increment over the interval is exact; a velocity in the same reading
+        // is one sample at its end, so it is not used (paper eqs. 1–2 integrate ω over Δt).
+        let dt = (stamp_ns - t0) as f64 * 1e-9;
+        let largest = (left - l0).abs().max((right - r0).abs());
+        if largest > self.max_speed * (dt + STAMP_JITTER_S) {
+            return Err(Skip::Implausible {
+                field: "position",
+                expected: "an encoder increment the wheels can make in the interval \
+                           (devices.max_wheel_turns_per_s, 50 ms of stamp jitter allowed; rad)",
+                found: largest,
+            });
+        }
+        WheelSpeeds::from_increments(left - l0, right - r0, dt)
+            .map_err(|_| Skip::NonFinite { field: "position" })
+    }
+
+    /// Wheel speeds `(left, right)` (rad/s) held over the interval from the previous
+    /// reading to `stamp_ns`.
+    pub fn velocities(
+        &mut self,
+        stamp_ns: u64,
+        left: f64,
+        right: f64,
+    ) -> Result<WheelSpeeds<f64>, Skip> {
+        if !(left.is_finite() && right.is_finite()) {
+            return Err(Skip::NonFinite { field: "velocity" });
+        }
+        let previous = self.previous.replace((stamp_ns, 0.0, 0.0));
+        let Some((t0, _, _)) = previous else {
+            return Err(Skip::First);
+        };
+        if stamp_ns <= t0 {
+            self.previous = previous;
+            return Err(Skip::TimeNotIncreasing {
+                previous_ns: t0,
+                stamp_ns,
+            });
+        }
+        WheelSpeeds::new(left, right, (stamp_ns - t0) as f64 * 1e-9)
+            .map_err(|_| Skip::NonFinite { field: "velocity" })
+    }
+}
+
+/// Motion steps from consecutive odometry poses.
+#[derive(Debug, Clone, Default)]
+pub struct OdometryTracker {
+    previous: Option<(u64, Pose2<f64>)>,
+}
+
+impl OdometryTracker {
+    /// The motion from the previous odometry pose to `pose` at `stamp_ns`, and the stamp
+    /// of the previous one (the start of the interval).
+    pub fn motion(&mut self, stamp_ns: u64, pose: &Pose2<f64>) -> Result<(Motion<f64>, u64), Skip> {
+        let pose = pose
+            .validated("pose")
+            .map_err(|_| Skip::NonFinite { field: "pose" })?;
+        let Some((t0, p0)) = self.previous else {
+            self.previous = Some((stamp_ns, pose));
+            return Err(Skip::First);
+        };
+        if stamp_ns <= t0 {
+            return Err(Skip::TimeNotIncreasing {
+                previous_ns: t0,
+                stamp_ns,
+            });
+        }
+        self.previous = Some((stamp_ns, pose));
+        let motion = Motion::from_odometry_poses(&p0, &pose)
+            .map_err(|_| Skip::NonFinite { field: "pose" })?;
+        Ok((motion, t0))
+    }
+}
