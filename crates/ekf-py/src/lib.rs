@@ -27,6 +27,7 @@ pub mod matching;
 pub mod params;
 pub mod replay;
 pub mod simulate;
+pub mod timed;
 
 use pyo3::prelude::*;
 
@@ -43,6 +44,7 @@ fn _ekf_loc(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<matching::Matches>()?;
     m.add_class::<localizer::Localizer>()?;
     m.add_class::<localizer::CompassUpdate>()?;
+    m.add_class::<timed::TimedLocalizer>()?;
     m.add_class::<replay::ReplayResult>()?;
     m.add_class::<simulate::SimulationResult>()?;
     m.add_function(wrap_pyfunction!(lines::extract_lines, m)?)?;

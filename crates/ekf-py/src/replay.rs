@@ -59,7 +59,7 @@ pub fn load_config(config: Option<&Bound<'_, PyAny>>) -> PyResult<Config> {
 }
 
 /// `mode` by its command-line name.
-fn parse_mode(mode: &str) -> PyResult<Mode> {
+pub(crate) fn parse_mode(mode: &str) -> PyResult<Mode> {
     Mode::ALL
         .into_iter()
         .find(|m| m.name() == mode)

@@ -167,7 +167,7 @@ fn read_reference(bag: &BagReader, topic: &str) -> Result<Trajectory, ReplayErro
     for message in bag.messages()? {
         let message = message?;
         if message.topic() == topic {
-            if let Some(pose) = reference_pose(&message) {
+            if let Some(pose) = message.decode().ok().and_then(|m| reference_pose(&m)) {
                 reference.push(message.log_time, pose);
             }
         }

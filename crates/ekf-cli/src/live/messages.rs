@@ -5,7 +5,7 @@ use crate::config::Config;
 use crate::devices::modbus_base::WheelTicks;
 use crate::devices::sick::measured::{range_max, scan_angles};
 use crate::devices::sick::{RangeUnit, Variant};
-use crate::mcap_io::{BagMessage, ChannelInfo, WriteError};
+use crate::mcap_io::{ChannelInfo, WriteError};
 use crate::mcap_io::{MESSAGE_ENCODING, SCHEMA_ENCODING};
 use crate::replay::outputs::OutputBag;
 use crate::ros2::builtin_interfaces::Time;
@@ -13,7 +13,7 @@ use crate::ros2::geometry_msgs::{Quaternion, Transform, TransformStamped, Vector
 use crate::ros2::sensor_msgs::{JointState, LaserScan, MagneticField};
 use crate::ros2::std_msgs::Header;
 use crate::ros2::tf2_msgs::TFMessage;
-use crate::ros2::{CdrError, RosMessage, Stamped};
+use crate::ros2::{RosMessage, Stamped};
 use std::collections::HashMap;
 use std::path::Path;
 use std::sync::Arc;
@@ -103,28 +103,11 @@ pub fn compass(config: &Config, t_ns: u64, bearing: f64) -> MagneticField {
     }
 }
 
-/// Encodes messages once, records them (when recording) and hands them on as bag
-/// messages, one channel per topic.
+/// Records messages (when recording) and names their channel, one per topic, for the
+/// filter loop, which takes each message as it is made.
 pub struct Recorder {
     path: Arc<Path>,
     channels: HashMap<String, Arc<ChannelInfo>>,
-    index: u64,
-}
-
-/// Why a message could not be recorded.
-#[derive(Debug, thiserror::Error)]
-pub enum RecordError {
-    /// Encoding failed.
-    #[error("{topic}: {source}")]
-    Encode {
-        /// The topic.
-        topic: String,
-        /// The encoder's error.
-        source: CdrError,
-    },
-    /// Writing failed.
-    #[error(transparent)]
-    Write(#[from] WriteError),
 }
 
 impl Recorder {
@@ -133,18 +116,18 @@ impl Recorder {
         Self {
             path: Arc::from(path),
             channels: HashMap::new(),
-            index: 0,
         }
     }
 
-    /// Records `message` on `topic` at its header stamp and returns it as the filter
-    /// loop reads it.
+    /// Records `message` on `topic` at its header stamp (encoding it only if `out` is a
+    /// bag to write) and returns where it was recorded, for the filter loop that takes the
+    /// message as it is ([`crate::replay`]'s `Run::handle_decoded`).
     pub fn record<M: RosMessage + Stamped>(
         &mut self,
         out: Option<&mut OutputBag>,
         topic: &str,
         message: &M,
-    ) -> Result<BagMessage, RecordError> {
+    ) -> Result<Recorded, WriteError> {
         let t_ns = message.header().stamp.to_nanos().unwrap_or(0);
         self.record_at(out, topic, t_ns, message)
     }
@@ -156,11 +139,7 @@ impl Recorder {
         topic: &str,
         t_ns: u64,
         message: &M,
-    ) -> Result<BagMessage, RecordError> {
-        let data = message.encode().map_err(|source| RecordError::Encode {
-            topic: topic.into(),
-            source,
-        })?;
+    ) -> Result<Recorded, WriteError> {
         if let Some(out) = out {
             out.writer().write_at(topic, t_ns, message)?;
         }
@@ -178,13 +157,18 @@ impl Recorder {
                 })
             })
             .clone();
-        self.index += 1;
-        Ok(BagMessage {
+        Ok(Recorded {
             channel,
-            index: self.index - 1,
             log_time: t_ns,
-            publish_time: t_ns,
-            data,
         })
     }
+}
+
+/// Where a message was recorded: its channel and log time.
+#[derive(Debug, Clone)]
+pub struct Recorded {
+    /// The channel (topic and type).
+    pub channel: Arc<ChannelInfo>,
+    /// The log time (ns): the message's header stamp.
+    pub log_time: u64,
 }

@@ -11,13 +11,15 @@ use crate::config::{Config, MotionSource};
 use crate::devices::modbus_base::{BaseConfig, BaseReading, EncoderTracker, WheelTicks};
 use crate::devices::sick::{BaudRate, SickConfig, Variant};
 use crate::devices::DeviceError;
+use crate::mcap_io::WriteError;
 use crate::replay::{Mode, Preamble, ReplayError, ReplayOptions, ReplaySummary, Run};
 use crate::ros2::builtin_interfaces::Time;
 use crate::ros2::diagnostic_msgs::{DiagnosticArray, DiagnosticStatus, KeyValue};
 use crate::ros2::std_msgs::Header;
+use crate::ros2::AnyMessage;
 use ekf_core::Pose2;
 use ekf_fusion::Forecast;
-use messages::{RecordError, Recorder};
+use messages::Recorder;
 use nalgebra::Matrix3;
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -120,7 +122,7 @@ pub enum LiveError {
     Filter(#[from] ReplayError),
     /// A message could not be recorded.
     #[error(transparent)]
-    Record(#[from] RecordError),
+    Record(#[from] WriteError),
 }
 
 /// The result of a run: the summary, and the error that ended it early, if any (the
@@ -472,8 +474,8 @@ impl<'a> Live<'a> {
             0,
         )?;
         let mut recorder = Recorder::new(Path::new(&name));
-        let message = recorder.record_at(run.output(), &config.topics.tf_static, t0, &tf)?;
-        run.handle(&message)?;
+        let at = recorder.record_at(run.output(), &config.topics.tf_static, t0, &tf)?;
+        run.handle_decoded(&at.channel, at.log_time, at.log_time, tf.into())?;
         Ok(Self {
             config,
             run,
@@ -603,7 +605,7 @@ impl<'a> Live<'a> {
             Data::Scan { ranges, unit } => {
                 let t = self.stamp(at);
                 let scan = messages::laser_scan(self.config, self.variant, unit, t, ranges);
-                self.feed(&topics.scan.clone(), &scan)?;
+                self.feed(&topics.scan.clone(), scan)?;
             }
             Data::Base {
                 reading: r,
@@ -614,12 +616,12 @@ impl<'a> Live<'a> {
                 };
                 let t = self.stamp(at);
                 let joints = messages::joint_state(self.config, t, ticks);
-                self.feed(&topics.joint_states.clone(), &joints)?;
+                self.feed(&topics.joint_states.clone(), joints)?;
                 match r.bearing() {
                     Some(bearing) => {
                         let t = self.stamp(at);
                         let field = messages::compass(self.config, t, bearing);
-                        self.feed(&topics.compass.clone(), &field)?;
+                        self.feed(&topics.compass.clone(), field)?;
                     }
                     None => self.summary.compass_invalid += 1,
                 }
@@ -628,20 +630,22 @@ impl<'a> Live<'a> {
                 let t = self.stamp(at);
                 let fix = f.to_nav_sat_fix(t, &self.config.devices.gps_frame);
                 self.summary.gps_fixes += 1;
-                self.feed(FIX_TOPIC, &fix)?;
+                self.feed(FIX_TOPIC, fix)?;
             }
         }
         Ok(())
     }
 
-    /// Records a message and runs the filter on it.
-    fn feed<M: crate::ros2::RosMessage + crate::ros2::Stamped>(
-        &mut self,
-        topic: &str,
-        message: &M,
-    ) -> Result<(), LiveError> {
-        let m = self.recorder.record(self.run.output(), topic, message)?;
-        self.run.handle(&m)?;
+    /// Records a message and runs the filter on it as it is (no encoding unless it is
+    /// recorded, no decoding): its stamp is its log time, so replaying the recording
+    /// fuses it at the same time.
+    fn feed<M>(&mut self, topic: &str, message: M) -> Result<(), LiveError>
+    where
+        M: crate::ros2::RosMessage + crate::ros2::Stamped + Into<AnyMessage>,
+    {
+        let at = self.recorder.record(self.run.output(), topic, &message)?;
+        self.run
+            .handle_decoded(&at.channel, at.log_time, at.log_time, message.into())?;
         Ok(())
     }
 

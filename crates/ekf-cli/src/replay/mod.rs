@@ -446,7 +446,11 @@ pub(crate) fn read_preamble(
                 p.scan_frame = Some(scan.header.frame_id);
             }
         } else if want_reference && p.first_reference.is_none() && topic == t.ground_truth {
-            p.first_reference = reference_pose(&message).map(|pose| (message.log_time, pose));
+            p.first_reference = message
+                .decode()
+                .ok()
+                .and_then(|m| reference_pose(&m))
+                .map(|pose| (message.log_time, pose));
         }
         let scan_done = p.scan_frame.is_some() || !has_scan;
         if scan_done && (!want_reference || p.first_reference.is_some()) {
@@ -456,8 +460,10 @@ pub(crate) fn read_preamble(
     Ok(p)
 }
 
-pub(crate) fn reference_pose(message: &BagMessage) -> Option<Pose2<f64>> {
-    match message.decode().ok()? {
+/// The reference pose a decoded `nav_msgs/Odometry` or `geometry_msgs/PoseStamped` holds;
+/// `None` if not finite or another type.
+pub(crate) fn reference_pose(message: &AnyMessage) -> Option<Pose2<f64>> {
+    match message {
         AnyMessage::Odometry(o) => pose2(&o.pose.pose),
         AnyMessage::PoseStamped(p) => pose2(&p.pose),
         _ => None,
@@ -466,6 +472,24 @@ pub(crate) fn reference_pose(message: &BagMessage) -> Option<Pose2<f64>> {
 
 /// What to do about a missing topic the mode cannot do without.
 pub(crate) const TOPIC_HINT: &str = "; name the log's topic in the config's [topics] table";
+
+/// What a topic's messages are to the filter ([`Run::role`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Role {
+    Motion,
+    Scan,
+    Compass,
+    Fix,
+    Reference,
+}
+
+/// A heading reading as an input.
+fn heading_input(heading: Result<inputs::Heading, Skip>) -> Result<Input, Skip> {
+    heading.map(|h| Input::Heading {
+        heading: h.heading,
+        variance: h.variance,
+    })
+}
 
 /// What a held input carries for its report: the channel it came on and its log time
 /// (warnings name the log time; the input is fused at its stamp).
@@ -664,22 +688,53 @@ impl<'a> Run<'a> {
         })
     }
 
-    /// One message as it is read: turned into an input and pushed, then every input
-    /// whose turn has come is fused, each at its stamp ([`TimedLocalizer`]).
+    /// One message as it is read: decoded if it is an input, turned into one and pushed,
+    /// then every input whose turn has come is fused, each at its stamp
+    /// ([`TimedLocalizer`]).
     pub(crate) fn handle(&mut self, message: &BagMessage) -> Result<(), ReplayError> {
-        *self
-            .summary
-            .messages_read
-            .entry(message.topic().to_owned())
-            .or_default() += 1;
-        let Some(input) = self.input(message)? else {
+        let Some(role) = self.role(message.topic()) else {
+            self.count(message.topic());
+            return Ok(());
+        };
+        let decoded = match message.decode() {
+            Ok(decoded) => decoded,
+            Err(_) if role == Role::Reference => {
+                self.count(message.topic());
+                self.summary.warn(
+                    message.topic(),
+                    message.log_time,
+                    "reference pose is not finite or not decodable".into(),
+                );
+                return Ok(());
+            }
+            Err(e) => return Err(e.into()),
+        };
+        let stamp = stamps::stamp_of(message);
+        self.handle_decoded(&message.channel, message.log_time, stamp, decoded)
+    }
+
+    /// A message already decoded (`ekf live` hands over the ones it makes), logged on
+    /// `channel` at `log_time` and stamped `stamp`: as [`handle`](Self::handle).
+    pub(crate) fn handle_decoded(
+        &mut self,
+        channel: &Arc<ChannelInfo>,
+        log_time: u64,
+        stamp: u64,
+        message: AnyMessage,
+    ) -> Result<(), ReplayError> {
+        let topic = channel.topic.as_str();
+        self.count(topic);
+        let Some(role) = self.role(topic) else {
+            return Ok(());
+        };
+        let Some(input) = self.input(topic, log_time, role, message)? else {
             return Ok(());
         };
         let tag = Tag {
-            channel: message.channel.clone(),
-            log_time: message.log_time,
+            channel: channel.clone(),
+            log_time,
         };
-        if let Err(late) = self.localizer.push(stamps::stamp_of(message), input, tag) {
+        if let Err(late) = self.localizer.push(stamp, input, tag) {
             let (_, tag) = &late.item;
             self.summary.warn(
                 &tag.channel.topic,
@@ -697,6 +752,40 @@ impl<'a> Run<'a> {
         Ok(())
     }
 
+    /// Counts a message read on `topic`.
+    fn count(&mut self, topic: &str) {
+        *self
+            .summary
+            .messages_read
+            .entry(topic.to_owned())
+            .or_default() += 1;
+    }
+
+    /// What a topic's messages are to the filter, if anything: the configured motion
+    /// source, the laser, the compass (in the modes that fuse it), GPS fixes (if
+    /// `gps.fuse`) and the reference.
+    fn role(&self, topic: &str) -> Option<Role> {
+        let t = &self.config.topics;
+        let motion_topic = if self.use_joints {
+            &t.joint_states
+        } else {
+            &t.odom
+        };
+        if topic == motion_topic {
+            Some(Role::Motion)
+        } else if topic == t.scan {
+            Some(Role::Scan)
+        } else if topic == t.compass && self.mode.uses_compass() {
+            Some(Role::Compass)
+        } else if topic == t.fix && self.config.gps.fuse {
+            Some(Role::Fix)
+        } else if topic == t.ground_truth {
+            Some(Role::Reference)
+        } else {
+            None
+        }
+    }
+
     /// Fuses every input still held, in stamp order (at the end of the log).
     pub(crate) fn fuse_held(&mut self) -> Result<(), ReplayError> {
         while let Some(step) = self.localizer.next_held(&mut self.timer) {
@@ -705,82 +794,65 @@ impl<'a> Run<'a> {
         Ok(())
     }
 
-    /// The filter input a message is, if any; a message that cannot be one is named in a
-    /// warning.
-    fn input(&mut self, message: &BagMessage) -> Result<Option<Input>, ReplayError> {
-        let topic = message.topic();
-        let t = &self.config.topics;
-        let motion_topic = if self.use_joints {
-            &t.joint_states
-        } else {
-            &t.odom
-        };
-        let uses_compass = self.mode.uses_compass();
-        let converted = if topic == motion_topic {
-            match message.decode()? {
-                AnyMessage::JointState(js) => {
-                    let m = &self.config.motion;
-                    wheel_input(&js, &m.left_joint, &m.right_joint).map_err(|names| {
-                        ReplayError::MissingJoints {
-                            log: self.log.clone(),
-                            topic: topic.into(),
-                            left: m.left_joint.clone(),
-                            right: m.right_joint.clone(),
-                            names,
-                        }
-                    })?
-                }
-                AnyMessage::Odometry(o) => Ok(Input::OdometryPose(planar(&o.pose.pose))),
-                _ => return Ok(None),
+    /// The filter input a decoded message in `role` is, if any; one that cannot be one
+    /// is named in a warning.
+    fn input(
+        &mut self,
+        topic: &str,
+        log_time: u64,
+        role: Role,
+        message: AnyMessage,
+    ) -> Result<Option<Input>, ReplayError> {
+        let converted = match (role, message) {
+            (Role::Motion, AnyMessage::JointState(js)) => {
+                let m = &self.config.motion;
+                wheel_input(&js, &m.left_joint, &m.right_joint).map_err(|names| {
+                    ReplayError::MissingJoints {
+                        log: self.log.clone(),
+                        topic: topic.into(),
+                        left: m.left_joint.clone(),
+                        right: m.right_joint.clone(),
+                        names,
+                    }
+                })?
             }
-        } else if topic == t.scan {
-            let AnyMessage::LaserScan(scan) = message.decode()? else {
-                return Ok(None);
-            };
-            Ok(Input::Scan(scan.into_scan()))
-        } else if topic == t.compass && uses_compass {
-            let cal = &self.config.compass_calibration;
-            let heading = match message.decode()? {
-                AnyMessage::Imu(imu) => heading_from_imu(&imu, cal),
-                AnyMessage::MagneticField(m) => heading_from_magnetic_field(&m, cal),
-                _ => return Ok(None),
-            };
-            heading.map(|h| Input::Heading {
-                heading: h.heading,
-                variance: h.variance,
-            })
-        } else if topic == t.fix && self.config.gps.fuse {
-            let AnyMessage::NavSatFix(fix) = message.decode()? else {
-                return Ok(None);
-            };
-            let map_offset = self.config.compass_calibration.map_offset;
-            match gps_position(&fix, &self.config.gps, map_offset) {
-                Ok((x, y, covariance)) => Ok(Input::Position { x, y, covariance }),
-                Err(refused) => {
-                    self.summary
-                        .warn(topic, message.log_time, refused.to_string());
-                    return Ok(None);
+            (Role::Motion, AnyMessage::Odometry(o)) => {
+                Ok(Input::OdometryPose(planar(&o.pose.pose)))
+            }
+            (Role::Scan, AnyMessage::LaserScan(scan)) => Ok(Input::Scan(scan.into_scan())),
+            (Role::Compass, AnyMessage::Imu(imu)) => {
+                heading_input(heading_from_imu(&imu, &self.config.compass_calibration))
+            }
+            (Role::Compass, AnyMessage::MagneticField(m)) => heading_input(
+                heading_from_magnetic_field(&m, &self.config.compass_calibration),
+            ),
+            (Role::Fix, AnyMessage::NavSatFix(fix)) => {
+                let map_offset = self.config.compass_calibration.map_offset;
+                match gps_position(&fix, &self.config.gps, map_offset) {
+                    Ok((x, y, covariance)) => Ok(Input::Position { x, y, covariance }),
+                    Err(refused) => {
+                        self.summary.warn(topic, log_time, refused.to_string());
+                        return Ok(None);
+                    }
                 }
             }
-        } else if topic == t.ground_truth {
-            match reference_pose(message) {
+            (Role::Reference, message) => match reference_pose(&message) {
                 Some(pose) => Ok(Input::Reference(pose)),
                 None => {
                     self.summary.warn(
                         topic,
-                        message.log_time,
+                        log_time,
                         "reference pose is not finite or not decodable".into(),
                     );
                     return Ok(None);
                 }
-            }
-        } else {
-            return Ok(None);
+            },
+            _ => return Ok(None),
         };
         match converted {
             Ok(input) => Ok(Some(input)),
             Err(skip) => {
-                self.summary.warn(topic, message.log_time, skip.to_string());
+                self.summary.warn(topic, log_time, skip.to_string());
                 Ok(None)
             }
         }
@@ -1044,14 +1116,15 @@ mod tests {
         Run::start(config, &options, &preamble, true, "test", t, 0).unwrap()
     }
 
-    fn feed<M: RosMessage + Stamped>(
+    fn feed<M: RosMessage + Stamped + Clone + Into<AnyMessage>>(
         run: &mut Run<'_>,
         recorder: &mut Recorder,
         topic: &str,
         m: &M,
     ) {
-        let message = recorder.record(None, topic, m).unwrap();
-        run.handle(&message).unwrap();
+        let at = recorder.record(None, topic, m).unwrap();
+        run.handle_decoded(&at.channel, at.log_time, at.log_time, m.clone().into())
+            .unwrap();
     }
 
     #[test]

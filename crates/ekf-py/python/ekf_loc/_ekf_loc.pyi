@@ -27,6 +27,7 @@ __all__ = [
     "Matches",
     "ReplayResult",
     "SimulationResult",
+    "TimedLocalizer",
     "UpdateOutcome",
     "__version__",
     "extract_lines",
@@ -410,6 +411,56 @@ class Localizer:
     @property
     def last_fusions(self) -> list[Tuple[int, int, float, bool]]:
         """(observed index, map index, nis, accepted) per match, in fusion order."""
+
+@final
+class TimedLocalizer:
+    """Stamped inputs (ns) pushed as they arrive, fused in stamp order: each is held until
+    one stamped ``max_lag`` (s) later has come, so one that comes up to ``max_lag`` late
+    is fused at its own stamp; later ones are dropped and counted (``add_*`` returns
+    False). With ``line_map`` a lost filter is found again by searching the map."""
+
+    def __new__(
+        cls,
+        pose: _Pose,
+        covariance: _ArrayLike,
+        line_map: Optional[LineMap] = None,
+        config: Optional[_ConfigDict] = None,
+        mode: _ReplayMode = "laser+compass",
+        max_lag: float = 0.5,
+        start_ns: int = 0,
+        global_localization: bool = False,
+    ) -> TimedLocalizer: ...
+    def add_wheel_angles(self, t_ns: int, left: float, right: float) -> bool: ...
+    def add_wheel_speeds(self, t_ns: int, left: float, right: float) -> bool: ...
+    def add_odometry(self, t_ns: int, pose: _Pose) -> bool: ...
+    def add_heading(self, t_ns: int, heading: float, variance: Optional[float] = None) -> bool: ...
+    def add_position(self, t_ns: int, xy: _ArrayLike, covariance: _ArrayLike) -> bool: ...
+    def add_scan(
+        self,
+        t_ns: int,
+        ranges: _ArrayLike,
+        angle_min: float,
+        angle_increment: float,
+        range_min: float = 0.0,
+        range_max: float = ...,
+    ) -> bool: ...
+    def flush(self) -> None:
+        """Fuses every input still held (when the inputs have ended)."""
+    def pose_now(self) -> Optional[Tuple[int, _F64Array, _F64Array]]:
+        """(t_ns, state (3,), covariance (3, 3)) predicted through the held motion."""
+    @property
+    def state(self) -> _F64Array: ...
+    @property
+    def covariance(self) -> _F64Array: ...
+    @property
+    def t_ns(self) -> Optional[int]: ...
+    @property
+    def held(self) -> int: ...
+    @property
+    def line_map(self) -> LineMap: ...
+    def counts(self) -> dict[str, Any]: ...
+    def take_trajectory(self) -> Tuple[_U64Array, _F64Array, _F64Array]:
+        """(t_ns (N,), states (N, 3), covariances (N, 3, 3)) since the last call."""
 
 @final
 class ReplayResult:
