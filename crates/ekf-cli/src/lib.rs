@@ -1,19 +1,13 @@
-//! The library behind the `ekf` command: ROS 2 MCAP input and output, log importers,
-//! trajectory evaluation and plots. `main.rs` only parses arguments and calls in here;
-//! nothing in this library prints or exits.
+//! The library behind the `ekf` command: one module per subcommand ([`commands`]), log
+//! importers ([`import`]) and plots ([`plot`]); the rest comes from the library crates
+//! (`ekf-ros`, `ekf-sim`, `ekf-devices`) and is re-exported here under the names the
+//! command has always used. `main.rs` only parses arguments and calls in here; nothing in
+//! this library prints or exits.
 
 pub mod commands;
-pub mod config;
-pub mod devices;
-pub mod emulate;
-pub mod eval;
-pub mod geo;
 pub mod import;
-pub mod live;
-pub mod mcap_io;
 pub mod plot;
-pub mod replay;
-pub mod ros2;
-pub mod sim;
-pub mod trajectory;
-pub mod tum;
+
+pub use ekf_devices::{devices, emulate, live};
+pub use ekf_ros::{config, eval, geo, mcap_io, replay, ros2, trajectory, tum};
+pub use ekf_sim as sim;

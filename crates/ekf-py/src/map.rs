@@ -6,7 +6,7 @@ use crate::errors::{file_error, path_error, value_error};
 use crate::lines::Lines;
 use crate::params::{from_dict, to_python};
 use crate::replay::load_config;
-use ekf_cli::commands::map::{build_map, MapSource};
+use ekf_ros::map_build::{build_map, MapSource};
 use lrf_lines::MapBuilderParams;
 use nalgebra::Point2;
 use numpy::{Ix2, Ix3, PyArray2, PyArray3};

@@ -4,9 +4,9 @@
 use crate::arrays::{new_array, row_major3};
 use crate::errors::{file_error, path_error, value_error};
 use crate::params::{from_dict, to_python};
-use ekf_cli::config::Config;
-use ekf_cli::replay::{replay as replay_log, Mode, ReplayOptions};
-use ekf_cli::trajectory::Trajectory;
+use ekf_ros::config::Config;
+use ekf_ros::replay::{replay as replay_log, Mode, ReplayOptions};
+use ekf_ros::trajectory::Trajectory;
 use numpy::{Ix1, Ix3, PyArray1, PyArray3};
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;

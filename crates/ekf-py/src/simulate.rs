@@ -4,8 +4,8 @@
 use crate::arrays::new_array;
 use crate::errors::{file_error, path_error};
 use crate::params::to_python;
-use ekf_cli::commands::simulate::{load_scenario, run_simulation, SimulateOptions, Steering};
-use ekf_cli::trajectory::Trajectory;
+use ekf_ros::trajectory::Trajectory;
+use ekf_sim::simulate::{load_scenario, run_simulation, SimulateOptions, Steering};
 use numpy::{Ix1, PyArray1};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
