@@ -1,17 +1,18 @@
 //! The closed loop: the follower steers by the true pose or by an estimator's, the robot
-//! drives, the sensors measure, an optional in-loop estimator (the same [`Localizer`] that
-//! `ekf replay` runs) fuses what they measure, and a [`LogRecorder`] may write it all.
+//! drives, the sensors measure, an optional in-loop estimator (the time-ordered
+//! localizer's [`Fuser`], which `ekf replay` drives too) fuses what they measure, and a
+//! [`LogRecorder`] may write it all.
 
 use super::log::LogRecorder;
 use super::rng::{SimRng, Stream};
 use super::scenario::Scenario;
 use super::sensors::{CompassReading, LASER_RANGE_MIN};
 use super::stepper::Simulator;
-use ekf_core::{angle_diff, Pose2, WheelSpeeds};
-use ekf_fusion::Mode;
+use ekf_core::{angle_diff, Pose2};
+use ekf_fusion::{Fused, Fuser, FusionConfig, FusionError, Input, Mode, Scan, Tracking};
 use ekf_ros::mcap_io::WriteError;
 use ekf_ros::trajectory::Trajectory;
-use lrf_lines::{LaserScan, LineMap, Localizer, LocalizerConfig, LocalizerError};
+use lrf_lines::{LineMap, LocalizerConfig, LocalizerError};
 use nalgebra::{Matrix3, Point2, Vector3};
 use serde::Serialize;
 
@@ -72,6 +73,9 @@ pub enum SimError {
     /// The estimator refused its configuration or failed.
     #[error("in-loop estimator: {0}")]
     Estimator(#[from] LocalizerError),
+    /// The time-ordered localizer refused its configuration.
+    #[error("in-loop estimator: {0}")]
+    Fusion(#[from] FusionError),
     /// The log could not be written.
     #[error(transparent)]
     Write(#[from] WriteError),
@@ -212,20 +216,18 @@ pub fn simulate(
             ..SimStats::default()
         },
         map: None,
-        initial_estimate: filter.as_ref().map(|f| f.localizer.pose()),
+        initial_estimate: filter.as_ref().map(|f| f.pose()),
     };
-    let mut last_ticks = [0i64; 2];
     for k in 0..=scenario.steps() {
         if k > 0 {
             let steer_by = match (&filter, options.feedback) {
-                (Some(f), Feedback::Estimate) => f.localizer.pose(),
+                (Some(f), Feedback::Estimate) => f.pose(),
                 _ => sim.pose(),
             };
             result.stats.distance_m += sim.advance(&steer_by);
         }
         let sample = sim.measure();
-        let (t_ns, truth, ticks, compass) =
-            (sample.t_ns, sample.truth, sample.ticks, sample.compass);
+        let (t_ns, truth, compass) = (sample.t_ns, sample.truth, sample.compass);
         if let Some(r) = recorder.as_deref_mut() {
             r.record(&sample)?;
         }
@@ -237,22 +239,14 @@ pub fn simulate(
         let position = Point2::new(truth.x, truth.y);
         s.min_clearance_m = s.min_clearance_m.min(scenario.room.clearance(&position));
         if let Some(f) = filter.as_mut() {
-            let wheel = (k > 0).then(|| {
-                let tick = scenario.robot.tick();
-                WheelSpeeds {
-                    left: (ticks[0] - last_ticks[0]) as f64 * tick / scenario.dt,
-                    right: (ticks[1] - last_ticks[1]) as f64 * tick / scenario.dt,
-                    dt: scenario.dt,
-                }
-            });
-            f.step(wheel, &sample, compass_variance, scenario, s)?;
-            let est = f.localizer.pose();
+            f.step(&sample, compass_variance, scenario, s)?;
+            let est = f.pose();
             result.estimate.push(t_ns, est);
+            let covariance = f.fuser.localizer().covariance();
             result
                 .nees
-                .push(Nees::of(&est, &truth, f.localizer.covariance()).unwrap_or(Nees::UNDEFINED));
+                .push(Nees::of(&est, &truth, covariance).unwrap_or(Nees::UNDEFINED));
         }
-        last_ticks = ticks;
         result.truth.push(t_ns, truth);
         result
             .path_deviation
@@ -260,49 +254,65 @@ pub fn simulate(
         result.travelled.push(s.distance_m);
     }
     result.stats.slips = sim.slips();
-    result.map = filter.map(|f| f.localizer.map().clone());
+    result.map = filter.map(|f| f.fuser.localizer().map().clone());
     Ok(result)
 }
 
-/// The in-loop estimator.
+/// The in-loop estimator: the fuser `ekf replay` drives, given each step's readings as a
+/// recording of the run gives them to replay (encoder angles, heading, scan, all at the
+/// step's stamp, in that order).
 struct InLoop {
-    localizer: Localizer,
+    fuser: Fuser,
     mode: Mode,
 }
 
 impl InLoop {
     fn new(e: &Estimator, initial: Pose2<f64>, scenario: &Scenario) -> Result<Self, SimError> {
-        let mut config = e.config.clone();
-        config.laser_mount = scenario.laser.mount;
+        let mut localizer = e.config.clone();
+        localizer.laser_mount = scenario.laser.mount;
+        let config = FusionConfig {
+            localizer,
+            mode: e.mode,
+            tracking: Tracking::Off,
+            // The loop hands over each step's readings in order.
+            max_lag: 0.0,
+            ..FusionConfig::default()
+        };
         let (sxy, sth) = e.initial_sigma;
         let p0 = Matrix3::from_diagonal(&Vector3::new(sxy * sxy, sxy * sxy, sth * sth));
-        let localizer = match &e.map {
-            Some(map) => Localizer::new(config, initial, p0, map.clone())?,
-            None => Localizer::with_first_scan_map(config, initial, p0)?,
-        };
+        let fuser = Fuser::new(&config, initial, p0, 0, e.map.clone())?;
         Ok(Self {
-            localizer,
+            fuser,
             mode: e.mode,
         })
     }
 
-    /// Prediction over the step, then the compass, then the scan (the order `ekf
-    /// replay` fuses a recording of the run in).
+    /// The estimate.
+    fn pose(&self) -> Pose2<f64> {
+        self.fuser.localizer().pose()
+    }
+
+    /// The wheels' encoder angles (a prediction over the step from the previous ones),
+    /// then the compass, then the scan.
     fn step(
         &mut self,
-        wheels: Option<WheelSpeeds<f64>>,
         sample: &Sample,
         compass_variance: f64,
         scenario: &Scenario,
         stats: &mut SimStats,
     ) -> Result<(), SimError> {
-        if let Some(w) = wheels {
-            self.localizer.predict_wheels(&w)?;
-        }
-        if self.mode.uses_compass() {
-            let update = self
-                .localizer
-                .update_compass_with_variance(sample.compass.heading, compass_variance)?;
+        let t = sample.t_ns;
+        let tick = scenario.robot.tick();
+        let wheels = Input::WheelAngles {
+            left: sample.ticks[0] as f64 * tick,
+            right: sample.ticks[1] as f64 * tick,
+        };
+        self.fuser.fuse(t, &wheels, &mut ())?;
+        let heading = Input::Heading {
+            heading: sample.compass.heading,
+            variance: Some(compass_variance),
+        };
+        if let Fused::Heading { update, .. } = self.fuser.fuse(t, &heading, &mut ())? {
             if update.outcome.accepted {
                 stats.compass_fused += 1;
                 stats.compass_outliers_fused += u64::from(sample.compass.outlier);
@@ -311,15 +321,18 @@ impl InLoop {
         if let (Some(ranges), true) = (sample.scan.as_deref(), self.mode.uses_laser()) {
             // The angles as the log stores them (float32), so a replay sees the same scan.
             let laser = &scenario.laser;
-            let scan = LaserScan {
+            let scan = Input::Scan(Scan {
                 angle_min: f64::from(laser.angle_min() as f32),
                 angle_increment: f64::from(laser.resolution as f32),
                 range_min: f64::from(LASER_RANGE_MIN as f32),
                 range_max: f64::from(laser.max_range as f32),
-                ranges,
-            };
-            let report = self.localizer.update_scan(&scan)?;
-            stats.lines_fused += report.fused as u64;
+                ranges: ranges.to_vec(),
+            });
+            match self.fuser.fuse(t, &scan, &mut ())? {
+                Fused::Scan(s) => stats.lines_fused += s.report.fused as u64,
+                Fused::ScanRefused(e) => return Err(LocalizerError::Extraction(e).into()),
+                _ => {}
+            }
         }
         Ok(())
     }
