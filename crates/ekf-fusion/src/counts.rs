@@ -44,6 +44,12 @@ pub struct CompassCounts {
     /// Of those fused, the ones that failed the gate and were fused to end a gate
     /// lock-out (`CompassConfig::recover_after`).
     pub recovered: u64,
+    /// Of those rejected, the ones whose lock-out recovery the laser refused: the last
+    /// scan's lines fit the filter's heading better (a stuck or biased compass).
+    pub refused_by_laser: u64,
+    /// Of those rejected, the ones not even tried: the compass did not follow the
+    /// robot's turns as odometry measured them (stuck, or not measuring the heading).
+    pub not_following: u64,
 }
 
 /// Everything the localizer counts.
@@ -51,6 +57,9 @@ pub struct CompassCounts {
 pub struct FusionCounts {
     /// Motion steps predicted.
     pub motion_steps: u64,
+    /// Of those, wheel readings predicted from their velocities because their encoder
+    /// angles stood still against them ([`crate::wheels::WheelTracker::angles`]).
+    pub wheel_velocities_used: u64,
     /// Laser pipeline counts.
     pub lines: LineCounts,
     /// Compass counts.

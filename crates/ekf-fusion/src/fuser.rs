@@ -8,7 +8,7 @@ use crate::counts::FusionCounts;
 use crate::motion::{MotionClock, MotionStep};
 use crate::tracking::{self, Tracking};
 use crate::verification::{Verification, Verified};
-use crate::wheels::{OdometryTracker, WheelTracker};
+use crate::wheels::{Contradiction, OdometryTracker, WheelTracker};
 use crate::{FusionError, Input, Scan, Skip};
 use ekf_core::{ChiSquareGate, Pose2, UpdateOutcome};
 use lrf_lines::{
@@ -16,6 +16,10 @@ use lrf_lines::{
     ScanReport, StageClock,
 };
 use nalgebra::{Matrix3, Point2};
+
+/// A motion reading's step over its interval `(t0, t1]`, and the contradiction between
+/// its encoder angles and velocities if the velocities were used.
+type StepOver = (MotionStep, u64, u64, Option<Contradiction>);
 
 /// What fusing one input did.
 #[derive(Debug, Clone, PartialEq)]
@@ -26,6 +30,9 @@ pub enum Fused {
         /// Whether the state was predicted.
         predicted: bool,
     },
+    /// A wheel reading whose encoder angles stood still against its velocities for
+    /// [`crate::wheels::CONTRADICTED_READINGS`] readings: predicted from the velocities.
+    MotionFromVelocities(Contradiction),
     /// A heading, fused or rejected by the gate.
     Heading {
         /// The heading (rad).
@@ -219,17 +226,27 @@ impl Fuser {
         odometry: &mut OdometryTracker,
         stamp_ns: u64,
         input: &Input,
-    ) -> Option<Result<(MotionStep, u64, u64), Skip>> {
+    ) -> Option<Result<StepOver, Skip>> {
         let step = match input {
-            Input::WheelAngles { left, right } => wheels
-                .angles(stamp_ns, *left, *right)
-                .map(|s| MotionStep::wheels_until(s, stamp_ns)),
-            Input::WheelVelocities { left, right } => wheels
-                .velocities(stamp_ns, *left, *right)
-                .map(|s| MotionStep::wheels_until(s, stamp_ns)),
+            Input::WheelAngles {
+                left,
+                right,
+                velocities,
+            } => wheels
+                .angles(stamp_ns, *left, *right, *velocities)
+                .map(|(s, seen)| {
+                    let (step, t0, t1) = MotionStep::wheels_until(s, stamp_ns);
+                    (step, t0, t1, seen)
+                }),
+            Input::WheelVelocities { left, right } => {
+                wheels.velocities(stamp_ns, *left, *right).map(|s| {
+                    let (step, t0, t1) = MotionStep::wheels_until(s, stamp_ns);
+                    (step, t0, t1, None)
+                })
+            }
             Input::OdometryPose(pose) => odometry
                 .motion(stamp_ns, pose)
-                .map(|(m, t0)| (MotionStep::Odometry(m), t0, stamp_ns)),
+                .map(|(m, t0)| (MotionStep::Odometry(m), t0, stamp_ns, None)),
             _ => return None,
         };
         Some(step)
@@ -241,7 +258,7 @@ impl Fuser {
         else {
             return Ok(Fused::NotFused);
         };
-        let (step, t0, t1) = match step {
+        let (step, t0, t1, contradiction) = match step {
             Ok(step) => step,
             Err(skip) => return Ok(Fused::Skipped(skip)),
         };
@@ -251,7 +268,13 @@ impl Fuser {
         };
         self.predict(part)?;
         self.counts.motion_steps += 1;
-        Ok(Fused::Motion { predicted: true })
+        Ok(match contradiction {
+            Some(seen) => {
+                self.counts.wheel_velocities_used += 1;
+                Fused::MotionFromVelocities(seen)
+            }
+            None => Fused::Motion { predicted: true },
+        })
     }
 
     /// Predicts the filter through one motion step.
@@ -299,6 +322,8 @@ impl Fuser {
             counts.recovered += u64::from(update.recovered);
         } else {
             counts.rejected += 1;
+            counts.refused_by_laser += u64::from(update.refused_by_laser);
+            counts.not_following += u64::from(update.not_following);
         }
         Ok(Fused::Heading { heading, update })
     }
@@ -508,7 +533,8 @@ impl Fuser {
         let config = self.localizer.config();
         let mut t_ns = fused_ns;
         for (stamp, input) in motion {
-            let Some(Ok((step, t0, t1))) = Self::step_of(&mut wheels, &mut odometry, stamp, input)
+            let Some(Ok((step, t0, t1, _))) =
+                Self::step_of(&mut wheels, &mut odometry, stamp, input)
             else {
                 continue;
             };

@@ -15,6 +15,11 @@ pub enum Input {
         left: f64,
         /// Right wheel angle (rad).
         right: f64,
+        /// The wheels' speeds at the same time (rad/s, left and right), if the source
+        /// reports them too: when the angles stop moving while these say the wheels turn
+        /// (a stuck encoder count), the motion is taken from them
+        /// ([`crate::wheels::WheelTracker::angles`]).
+        velocities: Option<[f64; 2]>,
     },
     /// The wheels' angular speeds (rad/s), held since the previous wheel reading: for a
     /// source with no encoder angles.

@@ -19,6 +19,23 @@ pub struct WheelTracker {
     /// Fastest plausible wheel speed (rad/s).
     max_speed: f64,
     previous: Option<(u64, f64, f64)>,
+    /// Readings in a row whose velocities moved the wheels clearly more than their
+    /// angles did.
+    contradicted: u32,
+}
+
+/// Readings in a row whose angles stand still against their velocities before the
+/// velocities are used instead ([`WheelTracker::angles`]).
+pub const CONTRADICTED_READINGS: u32 = 3;
+
+/// A reading whose encoder angles contradicted its velocities: the increments each gave
+/// over the interval (rad, left and right).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Contradiction {
+    /// From the encoder angles.
+    pub angles: [f64; 2],
+    /// From the velocities held over the interval.
+    pub velocities: [f64; 2],
 }
 
 impl WheelTracker {
@@ -28,17 +45,28 @@ impl WheelTracker {
         Self {
             max_speed: max_turns_per_s * core::f64::consts::TAU,
             previous: None,
+            contradicted: 0,
         }
     }
 
     /// Wheel speeds over the interval from the previous reading to encoder angles
     /// `(left, right)` (rad) at `stamp_ns`: the increments over the stamp difference.
+    ///
+    /// With the reading's `velocities` (rad/s), the two are checked against each other: a
+    /// wheel whose velocity, held over the interval, moves it more than its angle did, by
+    /// more than half the larger of the two and a hundredth of a radian, contradicts it.
+    /// After [`CONTRADICTED_READINGS`] such readings in a row the angles are taken to be
+    /// stuck (an encoder count that stopped updating) and the velocities are used, the one
+    /// that moves; the [`Contradiction`] is returned with the speeds then. Angles that
+    /// move while the velocities stay at zero are used as they are (many drivers leave the
+    /// velocities unset).
     pub fn angles(
         &mut self,
         stamp_ns: u64,
         left: f64,
         right: f64,
-    ) -> Result<WheelSpeeds<f64>, Skip> {
+        velocities: Option<[f64; 2]>,
+    ) -> Result<(WheelSpeeds<f64>, Option<Contradiction>), Skip> {
         if !(left.is_finite() && right.is_finite()) {
             return Err(Skip::NonFinite { field: "position" });
         }
@@ -65,8 +93,31 @@ impl WheelTracker {
                 found: largest,
             });
         }
-        WheelSpeeds::from_increments(left - l0, right - r0, dt)
-            .map_err(|_| Skip::NonFinite { field: "position" })
+        let increments = [left - l0, right - r0];
+        let from_velocities = velocities
+            .filter(|v| v.iter().all(|w| w.is_finite()))
+            .map(|[vl, vr]| [vl * dt, vr * dt]);
+        let contradiction = from_velocities.filter(|e| {
+            increments.iter().zip(e).any(|(d, e)| {
+                e.abs() > d.abs() && (d - e).abs() > 0.5 * d.abs().max(e.abs()) + 0.01
+            })
+        });
+        self.contradicted = match contradiction {
+            Some(_) => self.contradicted.saturating_add(1),
+            None => 0,
+        };
+        if let (Some(e), true) = (contradiction, self.contradicted >= CONTRADICTED_READINGS) {
+            let speeds = WheelSpeeds::new(e[0] / dt, e[1] / dt, dt)
+                .map_err(|_| Skip::NonFinite { field: "velocity" })?;
+            let seen = Contradiction {
+                angles: increments,
+                velocities: e,
+            };
+            return Ok((speeds, Some(seen)));
+        }
+        let speeds = WheelSpeeds::from_increments(increments[0], increments[1], dt)
+            .map_err(|_| Skip::NonFinite { field: "position" })?;
+        Ok((speeds, None))
     }
 
     /// Wheel speeds `(left, right)` (rad/s) held over the interval from the previous

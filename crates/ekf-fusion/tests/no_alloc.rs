@@ -75,6 +75,7 @@ fn inputs(seconds: u64) -> Vec<(u64, u64, Input)> {
         let wheels = Input::WheelAngles {
             left: wl * s,
             right: wr * s,
+            velocities: Some([wl, wr]),
         };
         out.push((t, t, wheels));
         if k % 5 == 0 {

@@ -22,6 +22,7 @@ fn drive(seconds: u64) -> Vec<(u64, Input)> {
             Input::WheelAngles {
                 left: wl * s,
                 right: wr * s,
+                velocities: None,
             },
         ));
         if k % 5 == 0 && k > 0 {

@@ -46,6 +46,7 @@ impl TimedLocalizer {
     fn fused(&mut self, stamp: u64, fused: &Fused) {
         let changed = match fused {
             Fused::Motion { predicted } => *predicted,
+            Fused::MotionFromVelocities(_) => true,
             Fused::Heading { .. } | Fused::Position(_) | Fused::Scan(_) => true,
             Fused::Skipped(Skip::First) => false,
             Fused::Skipped(_) | Fused::ScanRefused(_) => {
@@ -116,7 +117,15 @@ impl TimedLocalizer {
     /// Wheel encoder angles (rad, unwrapped) at `t_ns`: the motion since the previous
     /// wheel reading is their increment. Returns False if it came too late.
     fn add_wheel_angles(&mut self, t_ns: u64, left: f64, right: f64) -> PyResult<bool> {
-        self.add(t_ns, Input::WheelAngles { left, right })
+        let velocities = None;
+        self.add(
+            t_ns,
+            Input::WheelAngles {
+                left,
+                right,
+                velocities,
+            },
+        )
     }
 
     /// Wheel speeds (rad/s), held since the previous wheel reading.

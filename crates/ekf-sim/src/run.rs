@@ -306,6 +306,7 @@ impl InLoop {
         let wheels = Input::WheelAngles {
             left: sample.ticks[0] as f64 * tick,
             right: sample.ticks[1] as f64 * tick,
+            velocities: None,
         };
         self.fuser.fuse(t, &wheels, &mut ())?;
         let heading = Input::Heading {

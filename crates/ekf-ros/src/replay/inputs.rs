@@ -26,7 +26,15 @@ pub fn wheel_input(
         return Err(msg.name.clone());
     };
     if let (Some(&left), Some(&right)) = (msg.position.get(l), msg.position.get(r)) {
-        return Ok(Ok(Input::WheelAngles { left, right }));
+        let velocities = match (msg.velocity.get(l), msg.velocity.get(r)) {
+            (Some(&vl), Some(&vr)) => Some([vl, vr]),
+            _ => None,
+        };
+        return Ok(Ok(Input::WheelAngles {
+            left,
+            right,
+            velocities,
+        }));
     }
     match (msg.velocity.get(l), msg.velocity.get(r)) {
         (Some(&left), Some(&right)) => Ok(Ok(Input::WheelVelocities { left, right })),
@@ -331,7 +339,14 @@ mod tests {
         ) -> Result<Result<WheelSpeeds<f64>, Skip>, Vec<String>> {
             let input = wheel_input(msg, self.left, self.right)?;
             Ok(input.and_then(|input| match input {
-                Input::WheelAngles { left, right } => self.tracker.angles(stamp, left, right),
+                Input::WheelAngles {
+                    left,
+                    right,
+                    velocities,
+                } => self
+                    .tracker
+                    .angles(stamp, left, right, velocities)
+                    .map(|(speeds, _)| speeds),
                 Input::WheelVelocities { left, right } => {
                     self.tracker.velocities(stamp, left, right)
                 }

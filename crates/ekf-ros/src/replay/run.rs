@@ -48,6 +48,10 @@ impl StageClock for StageTimer {
     }
 }
 
+/// Compass readings in a row that do not follow the robot's turns before a warning says
+/// so (a single one is an outlier).
+const NOT_FOLLOWING_WARNED_AFTER: u32 = 3;
+
 /// What a topic's messages are to the filter ([`Run::role`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Role {
@@ -89,6 +93,11 @@ pub struct Run<'a> {
     poses: sink::PoseSink,
     timer: StageTimer,
     map_written: bool,
+    /// The last wheel reading was predicted from its velocities (a stretch is warned
+    /// about once).
+    wheels_contradicted: bool,
+    /// Compass readings in a row that did not follow the robot's turns.
+    compass_not_following: u32,
     /// Events and lost scans, if trajectories are kept.
     events: Option<events::EventLog>,
 }
@@ -177,6 +186,8 @@ impl<'a> Run<'a> {
                 stages: Default::default(),
             },
             map_written: false,
+            wheels_contradicted: false,
+            compass_not_following: 0,
             events: options.keep_trajectories.then(events::EventLog::default),
         };
         if let Some(out) = run.out.as_mut() {
@@ -447,12 +458,59 @@ impl<'a> Run<'a> {
                 if predicted {
                     self.record_pose(now)?;
                 }
+                self.wheels_contradicted = false;
+            }
+            Fused::MotionFromVelocities(seen) => {
+                if !std::mem::replace(&mut self.wheels_contradicted, true) {
+                    self.summary.warn(
+                        &channel.topic,
+                        *log_time,
+                        format!(
+                            "position: the encoder angles moved ({:.4}, {:.4}) rad over the \
+                             interval while the velocities say ({:.4}, {:.4}) rad: stuck \
+                             encoder counts? the velocities are used",
+                            seen.angles[0], seen.angles[1], seen.velocities[0], seen.velocities[1]
+                        ),
+                    );
+                }
+                self.record_pose(now)?;
             }
             Fused::Skipped(Skip::First) | Fused::BeforeStart => {}
             Fused::Skipped(skip) => self
                 .summary
                 .warn(&channel.topic, *log_time, skip.to_string()),
-            Fused::Heading { heading, update } => self.heading(now, heading, &update)?,
+            Fused::Heading { heading, update } => {
+                if update.refused_by_laser {
+                    self.summary.warn(
+                        &channel.topic,
+                        *log_time,
+                        format!(
+                            "heading {heading:.4} rad: {} readings in a row failed the gate \
+                             and the lock-out recovery was refused: the last scan's lines fit \
+                             the filter's heading better (a stuck or biased compass?)",
+                            update.rejected_in_a_row
+                        ),
+                    );
+                }
+                // One reading that does not follow is an outlier, which the gate would
+                // have refused too; a stretch of them is a stuck or broken compass.
+                self.compass_not_following = match update.not_following {
+                    true => self.compass_not_following + 1,
+                    false => 0,
+                };
+                if self.compass_not_following == NOT_FOLLOWING_WARNED_AFTER {
+                    self.summary.warn(
+                        &channel.topic,
+                        *log_time,
+                        format!(
+                            "heading {heading:.4} rad: {NOT_FOLLOWING_WARNED_AFTER} readings in \
+                             a row do not follow the robot's turns as odometry measured them \
+                             (a stuck compass?); not fused"
+                        ),
+                    );
+                }
+                self.heading(now, heading, &update)?
+            }
             Fused::Position(_) => self.record_pose(now)?,
             Fused::Scan(fused) => self.scan(now, &fused)?,
             Fused::ScanRefused(e) => self.summary.warn(&channel.topic, *log_time, e.to_string()),
@@ -477,6 +535,15 @@ impl<'a> Run<'a> {
             let (level, text) = match (update.outcome.accepted, update.recovered) {
                 (true, false) => (0, "fused"),
                 (true, true) => (1, "fused without the gate: consistent rejections in a row"),
+                (false, _) if update.not_following => (
+                    1,
+                    "not fused: does not follow the robot's turns as odometry measured them",
+                ),
+                (false, _) if update.refused_by_laser => (
+                    1,
+                    "rejected, its lock-out recovery refused: the laser fits the filter's \
+                     heading better",
+                ),
                 (false, _) => (1, "rejected by the chi-square gate"),
             };
             out.diagnostics(

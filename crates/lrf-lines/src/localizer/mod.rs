@@ -2,6 +2,7 @@
 //! step — wheel or odometry prediction, compass update, and scan → extract → match →
 //! update — over `ekf-core`, with per-step diagnostics and no printing.
 
+mod compass_follow;
 mod compass_lockout;
 mod config;
 mod error;
@@ -10,11 +11,12 @@ mod map_errors;
 pub use config::{CompassConfig, LocalizerConfig};
 pub use error::LocalizerError;
 
+use compass_follow::{CompassFollow, FOLLOW_PROBABILITY};
 use compass_lockout::{CompassLockout, Rejected};
 use map_errors::MapErrors;
 
 use crate::relocalize::{
-    fit_poses, relocalize, PoseFits, Relocalization, RelocalizeParams, SearchWindow,
+    fit_poses, relocalize, Hypothesis, PoseFits, Relocalization, RelocalizeParams, SearchWindow,
 };
 use crate::{LaserScan, LineExtractor, LineMap, MatchResult, Matcher, ObservedLine, WallErrors};
 use alloc::vec::Vec;
@@ -22,7 +24,7 @@ use ekf_core::{
     angle_diff, ChiSquareGate, Compass, Considered, DiffDrive, Ekf, LaserLine, Measurement, Motion,
     Pose2, Position, UpdateOutcome, WheelNoise, WheelSpeeds,
 };
-use nalgebra::{Matrix2, Matrix3};
+use nalgebra::{Matrix2, Matrix3, Vector3};
 
 /// What happened to one matched line during the sequential update.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -51,6 +53,16 @@ pub struct CompassUpdate {
     /// `true` if the heading failed the gate but was fused because `rejected_in_a_row`
     /// reached [`CompassConfig::recover_after`]: the filter, not the compass, was off.
     pub recovered: bool,
+    /// `true` if `rejected_in_a_row` reached `recover_after` but the recovery was
+    /// refused: the laser sides with the filter (see
+    /// [`Localizer::update_compass`]), so the compass, not the filter, is off (stuck,
+    /// biased, or disturbed). The run of rejections starts again, and until a reading
+    /// passes the gate no recovery trusts the compass.
+    pub refused_by_laser: bool,
+    /// `true` if the reading was not fused because the compass does not follow the
+    /// robot's turns as odometry measured them (`compass_follow.rs`): stuck, or not
+    /// measuring the heading.
+    pub not_following: bool,
 }
 
 /// Counts for one [`Localizer::update_scan`]; the lines, matches and fusions themselves
@@ -162,10 +174,19 @@ pub struct Localizer {
     /// The first-scan map's wall errors (empty for a given map).
     map_errors: MapErrors,
     build_map_from_next_scan: bool,
+    /// The map is the first scan's lines, placed at the filter's pose then: it carries the
+    /// filter's initial error, so it cannot judge the filter's heading against the compass.
+    map_from_first_scan: bool,
     extractor: LineExtractor,
     matcher: Matcher,
     compass_gate: ChiSquareGate<f64>,
     compass_lockout: CompassLockout,
+    compass_follow: CompassFollow,
+    /// `χ²₁(FOLLOW_PROBABILITY)`, the follow test's threshold.
+    follow_threshold: f64,
+    /// The laser refused a compass recovery, and no reading has passed the gate since:
+    /// the compass is suspect, and no recovery trusts it.
+    compass_refuted: bool,
     lines: Vec<ObservedLine>,
     matches: MatchResult,
     fusions: Vec<LineFusion>,
@@ -215,10 +236,19 @@ impl Localizer {
             map,
             map_errors: MapErrors::default(),
             build_map_from_next_scan: false,
+            map_from_first_scan: false,
             extractor,
             matcher,
             compass_gate,
             compass_lockout: CompassLockout::default(),
+            compass_follow: CompassFollow::default(),
+            follow_threshold: ekf_core::chi_square_quantile(FOLLOW_PROBABILITY, 1).map_err(
+                |error| LocalizerError::Config {
+                    group: "compass",
+                    error,
+                },
+            )?,
+            compass_refuted: false,
             lines: Vec::new(),
             matches: MatchResult::new(),
             fusions: Vec::new(),
@@ -250,6 +280,7 @@ impl Localizer {
         let mut localizer =
             Self::new(config, initial_pose, initial_covariance, LineMap::default())?;
         localizer.build_map_from_next_scan = true;
+        localizer.map_from_first_scan = true;
         Ok(localizer)
     }
 
@@ -275,10 +306,12 @@ impl Localizer {
         let (heading, p_theta) = (self.ekf.pose().theta, self.ekf.covariance()[(2, 2)]);
         let a = prediction(&mut self.ekf).map_err(LocalizerError::Filter)?;
         self.map_errors.predicted(&a);
-        self.compass_lockout.predicted(
+        let (turned, variance) = (
             angle_diff(self.ekf.pose().theta, heading),
             self.ekf.covariance()[(2, 2)] - p_theta,
         );
+        self.compass_lockout.predicted(turned, variance);
+        self.compass_follow.predicted(turned, variance);
         Ok(())
     }
 
@@ -306,6 +339,25 @@ impl Localizer {
         variance: f64,
     ) -> Result<CompassUpdate, LocalizerError> {
         let compass = Compass::new(heading, variance).map_err(LocalizerError::Filter)?;
+        if !self
+            .compass_follow
+            .follows(heading, variance, self.follow_threshold)
+        {
+            // Stuck, or not measuring the heading: not fused, not part of a lock-out.
+            let s = self.ekf.covariance()[(2, 2)] + variance;
+            let innovation = angle_diff(heading, self.ekf.pose().theta);
+            return Ok(CompassUpdate {
+                outcome: UpdateOutcome {
+                    accepted: false,
+                    nis: innovation * innovation / s,
+                    transition: Matrix3::identity(),
+                },
+                rejected_in_a_row: 0,
+                recovered: false,
+                refused_by_laser: false,
+                not_following: true,
+            });
+        }
         let gate = self.compass_gate;
         let s = self.ekf.covariance()[(2, 2)] + variance;
         let outcome = self.update_state(&compass, Some(&gate))?;
@@ -314,9 +366,12 @@ impl Localizer {
             outcome,
             rejected_in_a_row: 0,
             recovered: false,
+            refused_by_laser: false,
+            not_following: false,
         };
         if outcome.accepted {
             lockout.confirmed();
+            self.compass_refuted = false;
         } else {
             // Rejected, so the state is as it was: `ν² = NIS · S`.
             let reading = Rejected {
@@ -327,6 +382,15 @@ impl Localizer {
             update.rejected_in_a_row = lockout.rejected(&reading, &gate);
             let recover_after = self.config.compass.recover_after;
             if recover_after > 0 && update.rejected_in_a_row >= recover_after {
+                if self.compass_refuted
+                    || self.laser_refutes_recovery(&compass, reading.innovation_squared)
+                {
+                    self.compass_refuted = true;
+                    update.refused_by_laser = true;
+                    lockout.confirmed();
+                    self.compass_lockout = lockout;
+                    return Ok(update);
+                }
                 let fused = self.recover(&compass, reading.innovation_squared)?;
                 // The NIS the heading had at the predicted state, past the gate.
                 update.outcome = UpdateOutcome {
@@ -357,10 +421,8 @@ impl Localizer {
         compass: &Compass<f64>,
         innovation_squared: f64,
     ) -> Result<UpdateOutcome<f64>, LocalizerError> {
-        let p = *self.ekf.covariance();
-        let p_theta = p[(2, 2)];
-        let q = (innovation_squared - p_theta - compass.variance).max(0.0);
-        let along_pose = p.column(2) / p_theta;
+        let (along_pose, q) = self.recovery_noise(compass, innovation_squared);
+        let p_theta = self.ekf.covariance()[(2, 2)];
         self.atomically(|localizer| {
             localizer
                 .ekf
@@ -371,6 +433,56 @@ impl Localizer {
             localizer.fuse_state(compass, None)
         })
         .map_err(LocalizerError::Filter)
+    }
+
+    /// The direction `v = Cov(δx, θ) / P_θθ` and the variance `q = max(0, ν² − S)` of the
+    /// error a recovery adds ([`recover`](Self::recover)).
+    fn recovery_noise(
+        &self,
+        compass: &Compass<f64>,
+        innovation_squared: f64,
+    ) -> (Vector3<f64>, f64) {
+        let p = self.ekf.covariance();
+        let p_theta = p[(2, 2)];
+        let q = (innovation_squared - p_theta - compass.variance).max(0.0);
+        (p.column(2) / p_theta, q)
+    }
+
+    /// Whether the laser refutes a recovery with `compass`. Against a map, the last scan's
+    /// lines are scored at the filter's pose and at the pose the recovery would give, as
+    /// a relocalization scores its hypotheses ([`fit_poses`]). The recovery is refused
+    /// if they fit the filter's pose at least [`RelocalizeParams::min_margin`] times
+    /// better: the compass would override lines that side with the filter. A first-scan
+    /// map was placed with the filter's own heading, so its lines side with the filter
+    /// whatever its error: there the compass decides, as in the paper (a constant compass
+    /// bias and a wrong initial heading look the same to it). A lock-out while the laser still agrees with the filter is the compass's
+    /// fault (stuck, biased, a disturbed field), not the filter's. With no map or no lines
+    /// there is nothing to judge by, and the recovery goes ahead.
+    fn laser_refutes_recovery(&self, compass: &Compass<f64>, innovation_squared: f64) -> bool {
+        if self.map_from_first_scan || self.map.is_empty() || self.lines.is_empty() {
+            return false;
+        }
+        let (along_pose, q) = self.recovery_noise(compass, innovation_squared);
+        let mut trial = self.ekf;
+        let recovered = trial
+            .add_process_noise(&(along_pose * along_pose.transpose() * q))
+            .and_then(|()| trial.update_considering(compass, &Considered::none(), None));
+        if recovered.is_err() {
+            return false;
+        }
+        let params = RelocalizeParams::default();
+        let poses = [self.ekf.pose(), trial.pose()];
+        let fits = fit_poses(
+            &self.lines,
+            &self.map,
+            &self.config.laser_mount,
+            &poses,
+            &params,
+        );
+        let better = |a: &Hypothesis, b: &Hypothesis| {
+            a.inliers > 0 && a.score > 0.0 && a.score >= params.min_margin * b.score
+        };
+        better(&fits.fits[0], &fits.fits[1])
     }
 
     /// Fuses an absolute position `(x, y)` in the map frame (m) with covariance
