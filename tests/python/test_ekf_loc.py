@@ -213,6 +213,22 @@ def test_localizer_compass_recovers_from_a_gate_lock_out():
     assert "recovered=True" in repr(updates[2])
 
 
+def test_localizer_does_not_fuse_a_compass_that_stands_still_while_the_robot_turns():
+    # A 2-degree compass stuck at the start heading while odometry turns 0.1 rad a step:
+    # once the turn is past the follow test's window (0.16 rad and the odometry's own
+    # uncertainty) it is not fused, and stays so while it stays stuck.
+    loc = ekf_loc.Localizer((0.0, 0.0, 0.0), np.diag([1e-4, 1e-4, 1e-4]))
+    updates = []
+    for _ in range(8):
+        loc.predict_odometry(0.02, 0.1)
+        updates.append(loc.update_compass(0.0, math.radians(2.0) ** 2))
+    flags = [u.not_following for u in updates]
+    assert flags[:2] == [False, False] and flags[-4:] == [True] * 4, flags
+    assert flags == sorted(flags), flags
+    assert not any(u.accepted for u in updates if u.not_following)
+    assert "not_following=True" in repr(updates[-1])
+
+
 def test_localizer_builds_its_map_from_the_first_scan():
     loc = ekf_loc.Localizer(POSE, np.eye(3) * 1e-4)
     assert len(loc.line_map) == 0

@@ -67,20 +67,7 @@ impl WheelTracker {
         right: f64,
         velocities: Option<[f64; 2]>,
     ) -> Result<(WheelSpeeds<f64>, Option<Contradiction>), Skip> {
-        if !(left.is_finite() && right.is_finite()) {
-            return Err(Skip::NonFinite { field: "position" });
-        }
-        let previous = self.previous.replace((stamp_ns, left, right));
-        let Some((t0, l0, r0)) = previous else {
-            return Err(Skip::First);
-        };
-        if stamp_ns <= t0 {
-            self.previous = previous;
-            return Err(Skip::TimeNotIncreasing {
-                previous_ns: t0,
-                stamp_ns,
-            });
-        }
+        let (t0, l0, r0) = self.advance(stamp_ns, left, right, "position")?;
         // The encoder increment over the interval is exact; a velocity in the same reading
         // is one sample at its end, so it is not used (paper eqs. 1–2 integrate ω over Δt).
         let dt = (stamp_ns - t0) as f64 * 1e-9;
@@ -128,11 +115,26 @@ impl WheelTracker {
         left: f64,
         right: f64,
     ) -> Result<WheelSpeeds<f64>, Skip> {
+        let (t0, _, _) = self.advance(stamp_ns, left, right, "velocity")?;
+        WheelSpeeds::new(left, right, (stamp_ns - t0) as f64 * 1e-9)
+            .map_err(|_| Skip::NonFinite { field: "velocity" })
+    }
+    /// Makes `(left, right)` at `stamp_ns` the previous reading and returns the one
+    /// before, `(stamp, left, right)`. A non-finite `field`, the first reading, or a stamp
+    /// not after the previous one is refused; the last two leave the previous reading as
+    /// it was.
+    fn advance(
+        &mut self,
+        stamp_ns: u64,
+        left: f64,
+        right: f64,
+        field: &'static str,
+    ) -> Result<(u64, f64, f64), Skip> {
         if !(left.is_finite() && right.is_finite()) {
-            return Err(Skip::NonFinite { field: "velocity" });
+            return Err(Skip::NonFinite { field });
         }
-        let previous = self.previous.replace((stamp_ns, 0.0, 0.0));
-        let Some((t0, _, _)) = previous else {
+        let previous = self.previous.replace((stamp_ns, left, right));
+        let Some((t0, l0, r0)) = previous else {
             return Err(Skip::First);
         };
         if stamp_ns <= t0 {
@@ -142,8 +144,7 @@ impl WheelTracker {
                 stamp_ns,
             });
         }
-        WheelSpeeds::new(left, right, (stamp_ns - t0) as f64 * 1e-9)
-            .map_err(|_| Skip::NonFinite { field: "velocity" })
+        Ok((t0, l0, r0))
     }
 }
 
@@ -174,5 +175,50 @@ impl OdometryTracker {
         let motion = Motion::from_odometry_poses(&p0, &pose)
             .map_err(|_| Skip::NonFinite { field: "pose" })?;
         Ok((motion, t0))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const MS: u64 = 1_000_000;
+
+    #[test]
+    fn angles_that_stand_still_against_their_velocities_give_way_after_three_readings() {
+        let mut w = WheelTracker::new(10.0);
+        let v = Some([2.0, 2.2]);
+        assert_eq!(w.angles(0, 1.0, 1.0, v), Err(Skip::First));
+        // The counts stopped at 1.0 while the wheels turn at 2 and 2.2 rad/s.
+        let mut used = Vec::new();
+        for k in 1..=5 {
+            let (speeds, seen) = w.angles(k * 20 * MS, 1.0, 1.0, v).unwrap();
+            used.push(seen.is_some());
+            if let Some(seen) = seen {
+                assert_eq!(seen.angles, [0.0, 0.0]);
+                assert!((seen.velocities[0] - 0.04).abs() < 1e-12, "{seen:?}");
+                assert!((speeds.left - 2.0).abs() < 1e-9 && (speeds.right - 2.2).abs() < 1e-9);
+            } else {
+                assert_eq!((speeds.left, speeds.right), (0.0, 0.0));
+            }
+        }
+        assert_eq!(used, [false, false, true, true, true]);
+        // The counts move again, with the velocities: the angles are used.
+        let (speeds, seen) = w.angles(120 * MS, 1.04, 1.044, v).unwrap();
+        assert!(seen.is_none());
+        assert!((speeds.left - 2.0).abs() < 1e-9, "{speeds:?}");
+    }
+
+    #[test]
+    fn angles_that_move_while_the_velocities_are_zero_are_used() {
+        let mut w = WheelTracker::new(10.0);
+        let zero = Some([0.0, 0.0]);
+        assert_eq!(w.angles(0, 0.0, 0.0, zero), Err(Skip::First));
+        for k in 1..=5u32 {
+            let a = 0.04 * f64::from(k);
+            let (speeds, seen) = w.angles(u64::from(k) * 20 * MS, a, a, zero).unwrap();
+            assert!(seen.is_none());
+            assert!((speeds.left - 2.0).abs() < 1e-9, "{speeds:?}");
+        }
     }
 }

@@ -26,6 +26,12 @@ pub struct CompassUpdate {
     /// True if it failed the gate but was fused because `rejected_in_a_row` reached the
     /// config's `compass.recover_after`.
     pub recovered: bool,
+    /// True if `rejected_in_a_row` reached `recover_after` but the laser refused the
+    /// recovery: the last scan's lines fit the filter's heading better (a biased compass).
+    pub refused_by_laser: bool,
+    /// True if it was not fused because the compass stood still while the robot turned
+    /// (a stuck compass).
+    pub not_following: bool,
 }
 
 #[pymethods]
@@ -33,11 +39,14 @@ impl CompassUpdate {
     fn __repr__(&self) -> String {
         let py_bool = |b: bool| if b { "True" } else { "False" };
         format!(
-            "CompassUpdate(accepted={}, nis={}, rejected_in_a_row={}, recovered={})",
+            "CompassUpdate(accepted={}, nis={}, rejected_in_a_row={}, recovered={}, \
+             refused_by_laser={}, not_following={})",
             py_bool(self.accepted),
             self.nis,
             self.rejected_in_a_row,
-            py_bool(self.recovered)
+            py_bool(self.recovered),
+            py_bool(self.refused_by_laser),
+            py_bool(self.not_following)
         )
     }
 }
@@ -49,6 +58,8 @@ impl From<lrf_lines::CompassUpdate> for CompassUpdate {
             nis: u.outcome.nis,
             rejected_in_a_row: u.rejected_in_a_row,
             recovered: u.recovered,
+            refused_by_laser: u.refused_by_laser,
+            not_following: u.not_following,
         }
     }
 }

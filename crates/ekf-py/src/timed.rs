@@ -258,13 +258,14 @@ impl TimedLocalizer {
         }
     }
 
-    /// What was fused, as `ekf replay --json` counts it: `motion_steps`, `too_late`,
-    /// `skipped`, `lines` / `compass` / `positions` (dicts of counts), `losses`,
-    /// `relocalizations`, `scans_lost`.
+    /// What was fused, as `ekf replay --json` counts it: `motion_steps`,
+    /// `wheel_velocities_used`, `too_late`, `skipped`, `lines` / `compass` / `positions`
+    /// (dicts of counts), `losses`, `relocalizations`, `scans_lost`.
     fn counts<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let c = self.inner.fuser().counts();
         let d = PyDict::new(py);
         d.set_item("motion_steps", c.motion_steps)?;
+        d.set_item("wheel_velocities_used", c.wheel_velocities_used)?;
         d.set_item("too_late", c.too_late)?;
         d.set_item("skipped", self.skipped)?;
         let lines = PyDict::new(py);
@@ -284,6 +285,8 @@ impl TimedLocalizer {
         compass.set_item("accepted", c.compass.accepted)?;
         compass.set_item("rejected", c.compass.rejected)?;
         compass.set_item("recovered", c.compass.recovered)?;
+        compass.set_item("refused_by_laser", c.compass.refused_by_laser)?;
+        compass.set_item("not_following", c.compass.not_following)?;
         d.set_item("compass", compass)?;
         let positions = PyDict::new(py);
         positions.set_item("accepted", c.positions.accepted)?;

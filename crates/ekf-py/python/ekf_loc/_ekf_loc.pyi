@@ -91,6 +91,13 @@ class CompassUpdate:
     def recovered(self) -> bool:
         """True if it failed the gate but was fused because ``rejected_in_a_row``
         reached the config's ``compass.recover_after``."""
+    @property
+    def refused_by_laser(self) -> bool:
+        """True if ``rejected_in_a_row`` reached ``recover_after`` but the laser refused
+        the recovery: the last scan's lines fit the filter's heading better."""
+    @property
+    def not_following(self) -> bool:
+        """True if not fused because the compass stood still while the robot turned."""
 
 @final
 class LineUpdates:
