@@ -21,6 +21,14 @@ use nalgebra::{Matrix3, Point2};
 /// its encoder angles and velocities if the velocities were used.
 type StepOver = (MotionStep, u64, u64, Option<Contradiction>);
 
+/// The kinds of measurement whose duplicates are caught ([`Fuser::duplicate`]).
+#[derive(Debug, Clone, Copy)]
+enum Measured {
+    Heading = 0,
+    Position = 1,
+    Scan = 2,
+}
+
 /// What fusing one input did.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Fused {
@@ -115,6 +123,8 @@ pub struct Fuser {
     tracking: Tracking,
     consistency: ConsistencyMonitor,
     counts: FusionCounts,
+    /// Stamps of the last heading, position and scan fused (see [`Measured`]).
+    last_measured: [Option<u64>; 3],
 }
 
 impl Fuser {
@@ -155,6 +165,7 @@ impl Fuser {
             tracking,
             consistency: ConsistencyMonitor::default(),
             counts: FusionCounts::default(),
+            last_measured: [None; 3],
         })
     }
 
@@ -198,6 +209,9 @@ impl Fuser {
             Input::Position { x, y, covariance } => {
                 if stamp_ns < self.start_ns {
                     return Ok(Fused::BeforeStart);
+                }
+                if let Some(duplicate) = self.duplicate(Measured::Position, stamp_ns) {
+                    return Ok(duplicate);
                 }
                 self.catch_up(stamp_ns)?;
                 let outcome = self.localizer.update_position(
@@ -290,6 +304,17 @@ impl Fuser {
         Ok(())
     }
 
+    /// A measurement stamped as the previous one of its kind: a duplicated message (a
+    /// sensor does not measure twice at one instant), skipped rather than fused twice,
+    /// which would count its information twice.
+    fn duplicate(&mut self, kind: Measured, stamp_ns: u64) -> Option<Fused> {
+        let previous = self.last_measured[kind as usize].replace(stamp_ns);
+        (previous == Some(stamp_ns)).then_some(Fused::Skipped(Skip::TimeNotIncreasing {
+            previous_ns: stamp_ns,
+            stamp_ns,
+        }))
+    }
+
     /// Brings the state to `t_ns` before a measurement is fused there
     /// ([`MotionClock::extrapolate`]).
     fn catch_up(&mut self, t_ns: u64) -> Result<(), FusionError> {
@@ -310,6 +335,9 @@ impl Fuser {
         }
         if stamp_ns < self.start_ns {
             return Ok(Fused::BeforeStart);
+        }
+        if let Some(duplicate) = self.duplicate(Measured::Heading, stamp_ns) {
+            return Ok(duplicate);
         }
         self.catch_up(stamp_ns)?;
         let variance = variance.unwrap_or(self.localizer.config().compass.variance);
@@ -340,6 +368,9 @@ impl Fuser {
         }
         if !self.mode.uses_laser() {
             return Ok(Fused::NotFused);
+        }
+        if let Some(duplicate) = self.duplicate(Measured::Scan, stamp_ns) {
+            return Ok(duplicate);
         }
         self.catch_up(stamp_ns)?;
         let report = match self.localizer.update_scan_timed(&scan.as_scan(), clock) {

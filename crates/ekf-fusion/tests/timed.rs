@@ -190,3 +190,25 @@ fn the_pose_now_is_the_state_fusing_the_held_readings_gives() {
     assert_eq!(now.covariance, *all.covariance());
     assert!(now.pose.theta > fused_before.pose().theta, "it turned");
 }
+
+#[test]
+fn a_duplicated_heading_is_skipped_not_fused_twice() {
+    let inputs = drive(1);
+    let (_, once) = run(&inputs);
+    let mut twice = inputs.clone();
+    let at = twice
+        .iter()
+        .position(|(t, i)| *t == 505 * MS && matches!(i, Input::Heading { .. }))
+        .unwrap();
+    twice.insert(at + 1, twice[at].clone());
+    let (_, loc) = run(&twice);
+    assert_eq!(
+        loc.fuser().localizer().ekf(),
+        once.fuser().localizer().ekf(),
+        "the copy changed the estimate"
+    );
+    assert_eq!(
+        loc.fuser().counts().compass.accepted + loc.fuser().counts().compass.rejected,
+        once.fuser().counts().compass.accepted + once.fuser().counts().compass.rejected
+    );
+}
