@@ -11,8 +11,8 @@
 //!   given map the loss monitor ([`tracking`], [`verification`]) finds a lost filter
 //!   again; a consistency monitor ([`consistency`]) watches the laser innovations.
 //!
-//! `ekf replay` and `ekf live` (the `ekf-cli` crate) and the Python module drive this
-//! loop; docs/ARCHITECTURE.md shows where it sits. `#![no_std]` with `alloc` unless the
+//! `ekf replay` (`ekf-ros`), `ekf live` (`ekf-devices`), the simulator (`ekf-sim`) and
+//! the Python module drive this loop; docs/ARCHITECTURE.md shows where it sits. `#![no_std]` with `alloc` unless the
 //! default `std` feature is on; the `serde` feature makes the counts serializable.
 
 #![cfg_attr(not(feature = "std"), no_std)]

@@ -39,8 +39,8 @@ pub struct Step<T> {
 /// # The pose now
 ///
 /// The fused state trails the newest input by `max_lag`. [`pose_now`](Self::pose_now)
-/// predicts it through the motion readings still held, as fusing them will (a copy of the
-/// filter, a few hundred nanoseconds per reading): what a robot acts on. A late
+/// predicts it through the motion readings still held, as fusing them will (on a copy of
+/// the filter, one prediction per held reading): what a robot acts on. A late
 /// measurement costs nothing extra: it is fused once, in its place.
 pub struct TimedLocalizer<T> {
     fuser: Fuser,
