@@ -169,6 +169,11 @@ impl Fuser {
         })
     }
 
+    /// Which measurements it fuses.
+    pub fn mode(&self) -> Mode {
+        self.mode
+    }
+
     /// The filter, its map and what the last scan's lines did.
     pub fn localizer(&self) -> &Localizer {
         &self.localizer

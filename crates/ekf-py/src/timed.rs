@@ -7,15 +7,32 @@ use crate::arrays::{
 };
 use crate::errors::value_error;
 use crate::map::LineMap;
-use crate::params::from_dict;
+use crate::params::{from_dict, to_python};
 use crate::replay::parse_mode;
 use ekf_core::Pose2;
-use ekf_fusion::{Fused, Fuser, FusionConfig, Input, Scan, Skip, Tracking};
+use ekf_fusion::{
+    CompassCounts, Fused, Fuser, FusionConfig, GatedCounts, Input, LineCounts, Scan, Skip, Tracking,
+};
 use lrf_lines::LocalizerConfig;
 use numpy::{PyArray1, PyArray2, PyArray3};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use serde::Serialize;
+
+/// What `TimedLocalizer.counts()` returns, keyed as `ekf replay --json` keys it.
+#[derive(Serialize)]
+struct CountsView<'a> {
+    motion_steps: u64,
+    wheel_velocities_used: u64,
+    too_late: u64,
+    skipped: u64,
+    lines: &'a LineCounts,
+    compass: &'a CompassCounts,
+    positions: &'a GatedCounts,
+    losses: u64,
+    relocalizations: u64,
+    scans_lost: u64,
+}
 
 /// Inputs with their stamps (ns), pushed as they arrive, fused in stamp order: each is
 /// held until one stamped `max_lag` later has been pushed, so a measurement that comes
@@ -261,41 +278,21 @@ impl TimedLocalizer {
     /// What was fused, as `ekf replay --json` counts it: `motion_steps`,
     /// `wheel_velocities_used`, `too_late`, `skipped`, `lines` / `compass` / `positions`
     /// (dicts of counts), `losses`, `relocalizations`, `scans_lost`.
-    fn counts<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+    fn counts<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let c = self.inner.fuser().counts();
-        let d = PyDict::new(py);
-        d.set_item("motion_steps", c.motion_steps)?;
-        d.set_item("wheel_velocities_used", c.wheel_velocities_used)?;
-        d.set_item("too_late", c.too_late)?;
-        d.set_item("skipped", self.skipped)?;
-        let lines = PyDict::new(py);
-        for (k, v) in [
-            ("scans", c.lines.scans),
-            ("scans_used", c.lines.scans_used),
-            ("extracted", c.lines.extracted),
-            ("matched", c.lines.matched),
-            ("rejected", c.lines.rejected),
-            ("fused", c.lines.fused),
-            ("refused", c.lines.refused),
-        ] {
-            lines.set_item(k, v)?;
-        }
-        d.set_item("lines", lines)?;
-        let compass = PyDict::new(py);
-        compass.set_item("accepted", c.compass.accepted)?;
-        compass.set_item("rejected", c.compass.rejected)?;
-        compass.set_item("recovered", c.compass.recovered)?;
-        compass.set_item("refused_by_laser", c.compass.refused_by_laser)?;
-        compass.set_item("not_following", c.compass.not_following)?;
-        d.set_item("compass", compass)?;
-        let positions = PyDict::new(py);
-        positions.set_item("accepted", c.positions.accepted)?;
-        positions.set_item("rejected", c.positions.rejected)?;
-        d.set_item("positions", positions)?;
-        d.set_item("losses", c.tracking.losses)?;
-        d.set_item("relocalizations", c.tracking.relocalizations)?;
-        d.set_item("scans_lost", c.tracking.scans_lost)?;
-        Ok(d)
+        let view = CountsView {
+            motion_steps: c.motion_steps,
+            wheel_velocities_used: c.wheel_velocities_used,
+            too_late: c.too_late,
+            skipped: self.skipped,
+            lines: &c.lines,
+            compass: &c.compass,
+            positions: &c.positions,
+            losses: c.tracking.losses,
+            relocalizations: c.tracking.relocalizations,
+            scans_lost: c.tracking.scans_lost,
+        };
+        to_python(py, &view)
     }
 
     /// The fused states since the last call, one after each input that changed the state:

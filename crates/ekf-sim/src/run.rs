@@ -263,7 +263,6 @@ pub fn simulate(
 /// step's stamp, in that order).
 struct InLoop {
     fuser: Fuser,
-    mode: Mode,
 }
 
 impl InLoop {
@@ -281,10 +280,7 @@ impl InLoop {
         let (sxy, sth) = e.initial_sigma;
         let p0 = Matrix3::from_diagonal(&Vector3::new(sxy * sxy, sxy * sxy, sth * sth));
         let fuser = Fuser::new(&config, initial, p0, 0, e.map.clone())?;
-        Ok(Self {
-            fuser,
-            mode: e.mode,
-        })
+        Ok(Self { fuser })
     }
 
     /// The estimate.
@@ -319,7 +315,7 @@ impl InLoop {
                 stats.compass_outliers_fused += u64::from(sample.compass.outlier);
             }
         }
-        if let (Some(ranges), true) = (sample.scan.as_deref(), self.mode.uses_laser()) {
+        if let (Some(ranges), true) = (sample.scan.as_deref(), self.fuser.mode().uses_laser()) {
             // The angles as the log stores them (float32), so a replay sees the same scan.
             let laser = &scenario.laser;
             let scan = Input::Scan(Scan {

@@ -16,8 +16,8 @@ use crate::ros2::AnyMessage;
 use crate::trajectory::StampedPose;
 use ekf_core::Pose2;
 use ekf_fusion::{
-    consistency, Forecast, Fused, Fuser, Input, Mode, ScanFused, Skip, Step, TimedLocalizer,
-    Tracking, TrackingChange,
+    consistency, Forecast, Fused, Fuser, Input, ScanFused, Skip, Step, TimedLocalizer, Tracking,
+    TrackingChange,
 };
 use lrf_lines::{ScanStage, StageClock};
 use nalgebra::Matrix3;
@@ -85,7 +85,6 @@ struct Tag {
 pub struct Run<'a> {
     config: &'a Config,
     log: String,
-    mode: Mode,
     use_joints: bool,
     localizer: TimedLocalizer<Tag>,
     out: Option<OutputBag>,
@@ -175,7 +174,6 @@ impl<'a> Run<'a> {
         let mut run = Run {
             config,
             log: log_name.to_owned(),
-            mode: options.mode,
             use_joints,
             localizer: TimedLocalizer::new(fuser, max_lag_ns),
             out,
@@ -366,7 +364,7 @@ impl<'a> Run<'a> {
             Some(Role::Motion)
         } else if topic == t.scan {
             Some(Role::Scan)
-        } else if topic == t.compass && self.mode.uses_compass() {
+        } else if topic == t.compass && self.fuser().mode().uses_compass() {
             Some(Role::Compass)
         } else if topic == t.fix && self.config.gps.fuse {
             Some(Role::Fix)
