@@ -365,7 +365,7 @@ ERRORS = [
     (lambda: F(covariance=np.full((3, 3), np.nan)), ValueError,
      "covariance[0, 0] is NaN; expected a finite number"),
     (lambda: F(config={"robot": {"wheel_radius": -1, "track": 0.6}}), ValueError,
-     "invalid config [robot]: wheel radius is out of range: expected > 0"),
+     "invalid config: robot.wheel_radius: expected a finite number > 0, found -1"),
     (lambda: F(config={"robt": {}}), ValueError, "config: unknown field `robt`"),
     (lambda: F(config="robot.toml"), TypeError, "config: expected a dict or None"),
     (lambda: F().update_lines([[3.0, np.nan]], *ONE_LINE[1:]), ValueError,

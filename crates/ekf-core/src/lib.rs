@@ -52,6 +52,7 @@ pub mod kinematics;
 pub mod measurement;
 pub mod noise;
 pub mod real;
+pub mod setting;
 mod validate;
 
 pub use angle::{angle_diff, wrap_angle};
@@ -65,3 +66,4 @@ pub use measurement::{
 };
 pub use noise::{OdometryNoise, WheelNoise};
 pub use real::Real;
+pub use setting::{Expected, InvalidSetting};

@@ -1,6 +1,16 @@
 //! What the localizer is configured with, beyond the filter's own configuration.
 
-use lrf_lines::LocalizerConfig;
+use crate::FusionError;
+use ekf_core::setting::{check, Expected};
+use lrf_lines::{LocalizerConfig, LocalizerError};
+
+/// Longest lag an input may be held back for (s): a minute of inputs is more than any
+/// robot computer's logging delay, and bounds the memory held.
+const MAX_LAG_S: f64 = 60.0;
+
+/// The default fastest wheel speed (turns/s): 10 turns/s is 3 m/s on a 10 cm wheel,
+/// beyond what an indoor robot drives, well below an encoder glitch.
+pub const DEFAULT_MAX_WHEEL_TURNS_PER_S: f64 = 10.0;
 
 /// The paper's four estimator configurations (Fig. 9/10); the default is all sensors,
 /// laser + compass.
@@ -87,8 +97,72 @@ impl Default for FusionConfig {
             mode: Mode::default(),
             tracking: Tracking::default(),
             max_lag: 0.5,
-            max_wheel_turns_per_s: 10.0,
+            max_wheel_turns_per_s: DEFAULT_MAX_WHEEL_TURNS_PER_S,
             position_gate_probability: 0.99,
         }
+    }
+}
+
+impl FusionConfig {
+    /// Checks the localizer's groups ([`LocalizerConfig::validate`], keys in the table
+    /// `localizer`) and this configuration's own keys: `max_lag` in [0, 60] s,
+    /// `max_wheel_turns_per_s` > 0, `position_gate_probability` in (0, 1). The
+    /// [`Fuser`](crate::Fuser) refuses a configuration that fails this.
+    pub fn validate(&self) -> Result<(), FusionError> {
+        self.localizer.validate().map_err(|e| match e {
+            LocalizerError::Setting(s) => FusionError::Setting(s.in_table("localizer")),
+            other => FusionError::Localizer(other),
+        })?;
+        let ranges = [
+            ("max_lag", self.max_lag, Expected::SecondsIn(0.0, MAX_LAG_S)),
+            (
+                "max_wheel_turns_per_s",
+                self.max_wheel_turns_per_s,
+                Expected::Positive,
+            ),
+            (
+                "position_gate_probability",
+                self.position_gate_probability,
+                Expected::Probability,
+            ),
+        ];
+        for (key, value, expected) in ranges {
+            check(key, value, expected).map_err(FusionError::Setting)?;
+        }
+        Ok(())
+    }
+}
+
+#[cfg(all(test, feature = "std"))]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_defaults_pass_and_each_key_is_named_from_the_fusion_table() {
+        assert_eq!(FusionConfig::default().validate(), Ok(()));
+        let c = FusionConfig {
+            max_lag: 61.0,
+            ..FusionConfig::default()
+        };
+        assert_eq!(
+            c.validate().unwrap_err().to_string(),
+            "invalid config: max_lag: expected seconds in [0, 60], found 61"
+        );
+        let mut c = FusionConfig::default();
+        c.localizer.robot.track = 600.0;
+        assert_eq!(
+            c.validate().unwrap_err().to_string(),
+            "invalid config: localizer.robot.track: expected metres in (0, 10], found 600 \
+             (millimetres?)"
+        );
+        let c = FusionConfig {
+            position_gate_probability: 1.0,
+            ..FusionConfig::default()
+        };
+        assert!(c
+            .validate()
+            .unwrap_err()
+            .to_string()
+            .contains("position_gate_probability"));
     }
 }

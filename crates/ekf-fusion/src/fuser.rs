@@ -130,7 +130,8 @@ pub struct Fuser {
 impl Fuser {
     /// A filter at `initial` with covariance `p0`, referring to `start_ns` (motion before
     /// it is already in the initial pose), localizing in `map`, or in the first scan's
-    /// lines if `None` (the paper's mode).
+    /// lines if `None` (the paper's mode). Fails on a configuration
+    /// [`FusionConfig::validate`] refuses.
     pub fn new(
         config: &FusionConfig,
         initial: Pose2<f64>,
@@ -138,6 +139,7 @@ impl Fuser {
         start_ns: u64,
         map: Option<LineMap>,
     ) -> Result<Self, FusionError> {
+        config.validate()?;
         let tracking = match (config.tracking, map.is_some()) {
             (TrackingMode::Off, _) => Tracking::new(false),
             (_, false) => return Err(FusionError::TrackingNeedsMap),

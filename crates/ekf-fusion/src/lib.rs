@@ -31,7 +31,7 @@ pub mod tracking;
 pub mod verification;
 pub mod wheels;
 
-pub use config::{FusionConfig, Mode, Tracking};
+pub use config::{FusionConfig, Mode, Tracking, DEFAULT_MAX_WHEEL_TURNS_PER_S};
 pub use counts::{CompassCounts, FusionCounts, GatedCounts, LineCounts};
 pub use fuser::{Forecast, Fused, Fuser, ScanFused, TrackingChange};
 pub use input::{Input, Scan, Skip};
@@ -47,6 +47,8 @@ pub enum FusionError {
     /// The filter refused its configuration or an input, or a step produced a non-finite
     /// state.
     Localizer(LocalizerError),
+    /// A configuration value is outside its range ([`FusionConfig::validate`]).
+    Setting(ekf_core::InvalidSetting),
     /// Loss detection and relocalization ([`Tracking::FromInitialPose`],
     /// [`Tracking::Global`]) need a given map: a first-scan map carries its own placement
     /// error in the filter, which a restart would break.
@@ -57,6 +59,7 @@ impl fmt::Display for FusionError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             Self::Localizer(e) => e.fmt(f),
+            Self::Setting(e) => write!(f, "invalid config: {e}"),
             Self::TrackingNeedsMap => write!(
                 f,
                 "loss detection and global localization need a map (a first-scan map cannot \
@@ -71,6 +74,7 @@ impl std::error::Error for FusionError {
     fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
         match self {
             Self::Localizer(e) => Some(e),
+            Self::Setting(e) => Some(e),
             Self::TrackingNeedsMap => None,
         }
     }

@@ -3,7 +3,9 @@
 //! key has a default; `ekf config` prints [`DEFAULT_TOML`], the documented defaults.
 //! Unknown keys are errors (a typo must not silently fall back to a default).
 
-use lrf_lines::LocalizerConfig;
+use ekf_core::setting::{check, Expected, InvalidSetting};
+use ekf_fusion::FusionError;
+use lrf_lines::{LocalizerConfig, LocalizerError};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -316,173 +318,105 @@ impl Config {
         Self::from_toml(&text, &name)
     }
 
-    /// Checks the values that serde cannot: positive lengths and deviations, probabilities
-    /// in (0, 1), valid extraction and matching parameters.
+    /// Checks the values that serde cannot. Each section checks its own keys (the
+    /// localizer's groups in `lrf-lines`, the fusion loop's in `ekf-fusion`, the rest
+    /// here); this names the key as the file spells it.
     pub fn validated(self, path: &str) -> Result<Self, ConfigError> {
-        /// Largest wheel radius taken as a robot's (m).
-        const MAX_WHEEL_RADIUS_M: f64 = 2.0;
-        /// Largest track taken as a robot's (m).
-        const MAX_TRACK_M: f64 = 10.0;
-        /// Largest laser offset from the robot's centre (m).
-        const MAX_MOUNT_OFFSET_M: f64 = 10.0;
-        /// Largest map coordinate of a start pose (m): a UTM northing is below 1e7.
-        const MAX_MAP_COORDINATE_M: f64 = 1e7;
-        let invalid = |key: &str, message: &str| ConfigError::Invalid {
+        let setting = |e: InvalidSetting| ConfigError::Invalid {
             path: path.into(),
             line: None,
-            key: key.into(),
-            message: message.into(),
+            key: e.full_key().to_string(),
+            message: e.message().to_string(),
         };
-        let l = &self.localizer;
-        let positive = [
-            ("localizer.robot.wheel_radius", l.robot.wheel_radius),
-            ("localizer.robot.track", l.robot.track),
-            ("initial.sigma_xy", self.initial.sigma_xy),
-            ("initial.sigma_theta", self.initial.sigma_theta),
-            ("localizer.compass.variance", l.compass.variance),
-            ("gps.sigma", self.gps.sigma),
-            (
-                "devices.max_wheel_turns_per_s",
-                self.devices.max_wheel_turns_per_s,
-            ),
+        let sections = [
+            self.initial.validate().map_err(|e| e.in_table("initial")),
+            self.gps.validate().map_err(|e| e.in_table("gps")),
+            self.compass_calibration
+                .validate()
+                .map_err(|e| e.in_table("compass_calibration")),
+            self.devices.validate().map_err(|e| e.in_table("devices")),
         ];
-        for (key, v) in positive {
-            if !(v.is_finite() && v > 0.0) {
-                return Err(invalid(
-                    key,
-                    &format!("expected a finite number > 0, found {v}"),
-                ));
-            }
+        for result in sections {
+            result.map_err(setting)?;
         }
-        let probabilities = [
-            (
-                "localizer.compass.gate_probability",
-                l.compass.gate_probability,
-            ),
-            (
-                "localizer.matching.gate_probability",
-                l.matching.gate_probability,
-            ),
-            ("gps.gate_probability", self.gps.gate_probability),
-        ];
-        for (key, p) in probabilities {
-            if !(p > 0.0 && p < 1.0) {
-                return Err(invalid(
-                    key,
-                    &format!("expected a probability in (0, 1), found {p}"),
-                ));
-            }
-        }
-        // Sizes a wheeled robot can have: a value outside is a typo or a unit slip
-        // (millimetres for metres), not a robot.
-        let sizes = [
-            (
-                "localizer.robot.wheel_radius",
-                l.robot.wheel_radius,
-                MAX_WHEEL_RADIUS_M,
-            ),
-            ("localizer.robot.track", l.robot.track, MAX_TRACK_M),
-        ];
-        for (key, v, max) in sizes {
-            if v > max {
-                return Err(invalid(
-                    key,
-                    &format!(
-                        "expected metres in (0, {max}], found {} (millimetres?)",
-                        number(v)
-                    ),
-                ));
-            }
-        }
-        let lengths = [
-            ("initial.x", self.initial.x, MAX_MAP_COORDINATE_M),
-            ("initial.y", self.initial.y, MAX_MAP_COORDINATE_M),
-            (
-                "localizer.laser_mount.x",
-                l.laser_mount.x,
-                MAX_MOUNT_OFFSET_M,
-            ),
-            (
-                "localizer.laser_mount.y",
-                l.laser_mount.y,
-                MAX_MOUNT_OFFSET_M,
-            ),
-        ];
-        for (key, v, max) in lengths {
-            if !(v.is_finite() && v.abs() <= max) {
-                return Err(invalid(
-                    key,
-                    &format!(
-                        "expected metres within ±{}, found {}",
-                        number(max),
-                        number(v)
-                    ),
-                ));
-            }
-        }
-        let angles = [
-            ("initial.theta", self.initial.theta),
-            ("localizer.laser_mount.theta", l.laser_mount.theta),
-            (
-                "compass_calibration.declination",
-                self.compass_calibration.declination,
-            ),
-            (
-                "compass_calibration.map_offset",
-                self.compass_calibration.map_offset,
-            ),
-        ];
-        for (key, v) in angles {
-            if !(v.is_finite() && v.abs() <= std::f64::consts::TAU) {
-                return Err(invalid(
-                    key,
-                    &format!(
-                        "expected radians within ±2π (6.283), found {} (degrees?)",
-                        number(v)
-                    ),
-                ));
-            }
-        }
-        let lag = self.timing.max_lag;
-        if !(lag.is_finite() && (0.0..=60.0).contains(&lag)) {
-            return Err(invalid(
-                "timing.max_lag",
-                &format!("expected seconds in [0, 60], found {lag}"),
-            ));
-        }
-        if self.gps.origin_latitude.is_nan() || self.gps.origin_latitude.abs() > 89.0 {
-            return Err(invalid(
-                "gps.origin_latitude",
-                "expected degrees within ±89 (the tangent plane degenerates at the poles)",
-            ));
-        }
-        if self.gps.origin_longitude.is_nan() || self.gps.origin_longitude.abs() > 180.0 {
-            return Err(invalid(
-                "gps.origin_longitude",
-                "expected degrees within ±180",
-            ));
-        }
-        ekf_core::WheelNoise::new(l.wheel_noise.delta, l.wheel_noise.floor)
-            .map_err(|e| invalid("localizer.wheel_noise", &e.to_string()))?;
-        l.odometry_noise
-            .validated()
-            .map_err(|e| invalid("localizer.odometry_noise", &e.to_string()))?;
-        l.extraction
-            .validated()
-            .map_err(|e| invalid("localizer.extraction", &e.to_string()))?;
-        lrf_lines::Matcher::new(l.matching)
-            .map_err(|e| invalid("localizer.matching", &e.to_string()))?;
+        self.fusion(ekf_fusion::Mode::default())
+            .validate()
+            .map_err(|e| {
+                let (group, message) = match e {
+                    FusionError::Setting(e) => return setting(fusion_key_in_file(e)),
+                    FusionError::Localizer(LocalizerError::Config { group, error }) => {
+                        (group, error.to_string())
+                    }
+                    FusionError::Localizer(LocalizerError::Extraction(e)) => {
+                        ("extraction", e.to_string())
+                    }
+                    other => ("", other.to_string()),
+                };
+                ConfigError::Invalid {
+                    path: path.into(),
+                    line: None,
+                    key: format!("localizer.{group}").trim_end_matches('.').into(),
+                    message,
+                }
+            })?;
         Ok(self)
     }
 }
 
-/// `v` as a person writes it in a config: plain, or in exponent form when very large or
-/// very small (`1e300`, not 301 digits).
-fn number(v: f64) -> String {
-    if v != 0.0 && v.is_finite() && !(1e-4..1e6).contains(&v.abs()) {
-        format!("{v:e}")
-    } else {
-        format!("{v}")
+/// A [`FusionConfig`](ekf_fusion::FusionConfig) key as the file spells it: the fusion
+/// loop's own keys come from `[timing]`, `[devices]` and `[gps]`.
+fn fusion_key_in_file(e: InvalidSetting) -> InvalidSetting {
+    match e.key {
+        "max_lag" => e.in_table("timing"),
+        "max_wheel_turns_per_s" => e.in_table("devices"),
+        "position_gate_probability" => InvalidSetting {
+            key: "gate_probability",
+            ..e
+        }
+        .in_table("gps"),
+        _ => e,
+    }
+}
+
+/// Largest map coordinate of a start pose (m): a UTM northing is below 1e7.
+const MAX_MAP_COORDINATE_M: f64 = 1e7;
+
+impl InitialPose {
+    /// A pose within ±1e7 m (a UTM northing is below that) and ±2π rad, and positive
+    /// standard deviations.
+    pub fn validate(&self) -> Result<(), InvalidSetting> {
+        check("x", self.x, Expected::MetresWithin(MAX_MAP_COORDINATE_M))?;
+        check("y", self.y, Expected::MetresWithin(MAX_MAP_COORDINATE_M))?;
+        check("theta", self.theta, Expected::Radians)?;
+        check("sigma_xy", self.sigma_xy, Expected::Positive)?;
+        check("sigma_theta", self.sigma_theta, Expected::Positive)
+    }
+}
+
+impl GpsConfig {
+    /// A positive `sigma` and an origin off the poles (the tangent plane degenerates
+    /// there) within ±180° of longitude. The gate is the fusion loop's
+    /// (`position_gate_probability`).
+    pub fn validate(&self) -> Result<(), InvalidSetting> {
+        check("sigma", self.sigma, Expected::Positive)?;
+        check(
+            "origin_latitude",
+            self.origin_latitude,
+            Expected::DegreesWithin(89.0, " (the tangent plane degenerates at the poles)"),
+        )?;
+        check(
+            "origin_longitude",
+            self.origin_longitude,
+            Expected::DegreesWithin(180.0, ""),
+        )
+    }
+}
+
+impl CompassCalibrationConfig {
+    /// Angles in radians within ±2π: a larger one is in degrees.
+    pub fn validate(&self) -> Result<(), InvalidSetting> {
+        check("declination", self.declination, Expected::Radians)?;
+        check("map_offset", self.map_offset, Expected::Radians)
     }
 }
 
@@ -586,6 +520,26 @@ mod tests {
             (
                 "[initial]\ny = -2e7\n",
                 "w.toml: line 2: initial.y: expected metres within ±1e7, found -2e7",
+            ),
+            // The fusion loop's keys, checked in ekf-fusion, named as the file has them.
+            (
+                "[timing]\nmax_lag = 90\n",
+                "w.toml: line 2: timing.max_lag: expected seconds in [0, 60], found 90",
+            ),
+            (
+                "[gps]\nsigma = 2.0\ngate_probability = 1.5\n",
+                "w.toml: line 3: gps.gate_probability: expected a probability in (0, 1), \
+                 found 1.5",
+            ),
+            (
+                "[devices]\nmax_wheel_turns_per_s = 0\n",
+                "w.toml: line 2: devices.max_wheel_turns_per_s: expected a finite number > 0, \
+                 found 0",
+            ),
+            (
+                "[gps]\norigin_latitude = 100.67\n",
+                "w.toml: line 2: gps.origin_latitude: expected degrees within ±89 (the tangent \
+                 plane degenerates at the poles), found 100.67",
             ),
         ] {
             let err = Config::from_toml(toml, "w.toml").unwrap_err().to_string();

@@ -1,6 +1,7 @@
 //! The `[devices]` section of the configuration: how `ekf live` talks to the robot's
 //! devices and turns their raw values into ROS messages.
 
+use ekf_core::setting::{check, Expected, InvalidSetting};
 use serde::{Deserialize, Serialize};
 
 /// Serial devices of the paper's robot (docs/ARCHITECTURE.md §5).
@@ -45,11 +46,36 @@ impl Default for DevicesConfig {
             base_unit_id: 1,
             base_baud: 38_400,
             ticks_per_revolution: 500.0,
-            max_wheel_turns_per_s: 10.0,
+            max_wheel_turns_per_s: ekf_fusion::DEFAULT_MAX_WHEEL_TURNS_PER_S,
             poll_rate_hz: 10.0,
             gps_baud: 4800,
             gps_frame: "gps".into(),
             timeout_s: 2.0,
         }
+    }
+}
+
+impl DevicesConfig {
+    /// Positive encoder resolution, wheel-speed limit, poll rate, timeout and laser
+    /// resolution. Whether the laser can scan the angle and resolution asked for is the
+    /// driver's to say, when `ekf live` brings it up.
+    pub fn validate(&self) -> Result<(), InvalidSetting> {
+        check(
+            "ticks_per_revolution",
+            self.ticks_per_revolution,
+            Expected::Positive,
+        )?;
+        check(
+            "max_wheel_turns_per_s",
+            self.max_wheel_turns_per_s,
+            Expected::Positive,
+        )?;
+        check("poll_rate_hz", self.poll_rate_hz, Expected::Positive)?;
+        check("timeout_s", self.timeout_s, Expected::Positive)?;
+        check(
+            "laser_resolution_deg",
+            self.laser_resolution_deg,
+            Expected::Positive,
+        )
     }
 }

@@ -102,6 +102,7 @@ impl From<FusionError> for ReplayError {
     fn from(e: FusionError) -> Self {
         match e {
             FusionError::Localizer(e) => Self::Filter(e),
+            FusionError::Setting(e) => Self::Filter(LocalizerError::Setting(e)),
             FusionError::TrackingNeedsMap => Self::GlobalNeedsMap,
         }
     }

@@ -1,8 +1,10 @@
 //! The Localizer's configuration: one serde struct, grouped as robot, noise, laser,
 //! extraction, matching and compass, with every default documented here.
 
-use crate::{ExtractionParams, MatchParams};
-use ekf_core::{DiffDrive, OdometryNoise, Pose2, WheelNoise};
+use super::LocalizerError;
+use crate::{ExtractionParams, LineExtractor, MatchParams, Matcher};
+use ekf_core::setting::{check, Expected};
+use ekf_core::{ChiSquareGate, Compass, DiffDrive, OdometryNoise, Pose2, WheelNoise};
 use serde::{Deserialize, Serialize};
 
 /// Everything a [`Localizer`](super::Localizer) needs besides the initial state and the
@@ -47,6 +49,100 @@ impl Default for LocalizerConfig {
             matching: MatchParams::default(),
             compass: CompassConfig::default(),
         }
+    }
+}
+
+/// Largest wheel radius taken as a robot's (m): a larger one is a unit slip.
+const MAX_WHEEL_RADIUS_M: f64 = 2.0;
+/// Largest track taken as a robot's (m).
+const MAX_TRACK_M: f64 = 10.0;
+/// Largest laser offset from the robot's centre (m).
+const MAX_MOUNT_OFFSET_M: f64 = 10.0;
+
+impl LocalizerConfig {
+    /// Checks every group, in the order they are listed: sizes a wheeled robot can have
+    /// (a radius over 2 m or a track over 10 m is millimetres, not a robot), a laser
+    /// within 10 m of the robot's centre and turned by radians, not degrees, positive
+    /// noise, gate probabilities in (0, 1), and each group's own rules (noise models,
+    /// extraction, matching). Keys are named from this table (`robot.track`); the
+    /// [`Localizer`](super::Localizer) refuses a configuration that fails this.
+    pub fn validate(&self) -> Result<(), LocalizerError> {
+        let ranges = [
+            (
+                "robot.wheel_radius",
+                self.robot.wheel_radius,
+                Expected::Positive,
+            ),
+            ("robot.track", self.robot.track, Expected::Positive),
+            (
+                "robot.wheel_radius",
+                self.robot.wheel_radius,
+                Expected::LengthUpTo(MAX_WHEEL_RADIUS_M),
+            ),
+            (
+                "robot.track",
+                self.robot.track,
+                Expected::LengthUpTo(MAX_TRACK_M),
+            ),
+            (
+                "laser_mount.x",
+                self.laser_mount.x,
+                Expected::MetresWithin(MAX_MOUNT_OFFSET_M),
+            ),
+            (
+                "laser_mount.y",
+                self.laser_mount.y,
+                Expected::MetresWithin(MAX_MOUNT_OFFSET_M),
+            ),
+            (
+                "laser_mount.theta",
+                self.laser_mount.theta,
+                Expected::Radians,
+            ),
+            (
+                "compass.variance",
+                self.compass.variance,
+                Expected::Positive,
+            ),
+            (
+                "compass.gate_probability",
+                self.compass.gate_probability,
+                Expected::Probability,
+            ),
+            (
+                "matching.gate_probability",
+                self.matching.gate_probability,
+                Expected::Probability,
+            ),
+        ];
+        for (key, value, expected) in ranges {
+            check(key, value, expected).map_err(LocalizerError::Setting)?;
+        }
+        let cfg = |group| move |error| LocalizerError::Config { group, error };
+        DiffDrive::new(self.robot.wheel_radius, self.robot.track).map_err(cfg("robot"))?;
+        WheelNoise::new(self.wheel_noise.delta, self.wheel_noise.floor)
+            .map_err(cfg("wheel_noise"))?;
+        self.odometry_noise
+            .validated()
+            .map_err(cfg("odometry_noise"))?;
+        self.laser_mount
+            .validated("laser mount")
+            .map_err(cfg("laser_mount"))?;
+        Compass::new(0.0, self.compass.variance).map_err(cfg("compass"))?;
+        ChiSquareGate::<f64>::from_probability(self.compass.gate_probability, 1)
+            .map_err(cfg("compass"))?;
+        if self.compass.recover_after == 1 {
+            return Err(LocalizerError::Config {
+                group: "compass",
+                error: ekf_core::Error::OutOfRange {
+                    what: "recover_after",
+                    expected: "0 (never) or ≥ 2; 1 would fuse every rejected heading",
+                },
+            });
+        }
+        Matcher::new(self.matching).map_err(cfg("matching"))?;
+        LineExtractor::new(self.extraction)?;
+        Ok(())
     }
 }
 

@@ -14,6 +14,8 @@ pub enum LocalizerError {
         /// What was wrong, naming the field.
         error: ekf_core::Error,
     },
+    /// A configuration value is outside its range, named by its dotted key.
+    Setting(ekf_core::InvalidSetting),
     /// The line extractor refused its parameters (group `extraction`) or a scan header.
     Extraction(ExtractionError),
     /// The filter refused an input (a non-finite initial state, wheel speed, motion or
@@ -25,6 +27,7 @@ impl fmt::Display for LocalizerError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             Self::Config { group, error } => write!(f, "invalid config [{group}]: {error}"),
+            Self::Setting(e) => write!(f, "invalid config: {e}"),
             Self::Extraction(e) => write!(f, "line extraction: {e}"),
             Self::Filter(e) => write!(f, "filter: {e}"),
         }
@@ -36,6 +39,7 @@ impl std::error::Error for LocalizerError {
     fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
         match self {
             Self::Config { error, .. } => Some(error),
+            Self::Setting(e) => Some(e),
             Self::Extraction(e) => Some(e),
             Self::Filter(e) => Some(e),
         }

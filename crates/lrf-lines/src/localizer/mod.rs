@@ -21,8 +21,8 @@ use crate::relocalize::{
 use crate::{LaserScan, LineExtractor, LineMap, MatchResult, Matcher, ObservedLine, WallErrors};
 use alloc::vec::Vec;
 use ekf_core::{
-    angle_diff, ChiSquareGate, Compass, Considered, DiffDrive, Ekf, LaserLine, Measurement, Motion,
-    Pose2, Position, UpdateOutcome, WheelNoise, WheelSpeeds,
+    angle_diff, ChiSquareGate, Compass, Considered, Ekf, LaserLine, Measurement, Motion, Pose2,
+    Position, UpdateOutcome, WheelSpeeds,
 };
 use nalgebra::{Matrix2, Matrix3, Vector3};
 
@@ -203,31 +203,16 @@ impl Localizer {
         initial_covariance: Matrix3<f64>,
         map: LineMap,
     ) -> Result<Self, LocalizerError> {
-        let cfg = |group| move |error| LocalizerError::Config { group, error };
-        DiffDrive::new(config.robot.wheel_radius, config.robot.track).map_err(cfg("robot"))?;
-        WheelNoise::new(config.wheel_noise.delta, config.wheel_noise.floor)
-            .map_err(cfg("wheel_noise"))?;
-        config
-            .odometry_noise
-            .validated()
-            .map_err(cfg("odometry_noise"))?;
-        config
-            .laser_mount
-            .validated("laser mount")
-            .map_err(cfg("laser_mount"))?;
-        Compass::new(0.0, config.compass.variance).map_err(cfg("compass"))?;
+        config.validate()?;
         let compass_gate = ChiSquareGate::from_probability(config.compass.gate_probability, 1)
-            .map_err(cfg("compass"))?;
-        if config.compass.recover_after == 1 {
-            return Err(LocalizerError::Config {
+            .map_err(|error| LocalizerError::Config {
                 group: "compass",
-                error: ekf_core::Error::OutOfRange {
-                    what: "recover_after",
-                    expected: "0 (never) or ≥ 2; 1 would fuse every rejected heading",
-                },
-            });
-        }
-        let matcher = Matcher::new(config.matching).map_err(cfg("matching"))?;
+                error,
+            })?;
+        let matcher = Matcher::new(config.matching).map_err(|error| LocalizerError::Config {
+            group: "matching",
+            error,
+        })?;
         let extractor = LineExtractor::new(config.extraction)?;
         let ekf = Ekf::new(initial_pose, initial_covariance).map_err(LocalizerError::Filter)?;
         Ok(Self {
