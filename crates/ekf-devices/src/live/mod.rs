@@ -218,16 +218,8 @@ pub fn run(
                 d.laser_baud
             ))
         })?;
-    if !(d.timeout_s > 0.0
-        && d.poll_rate_hz > 0.0
-        && d.ticks_per_revolution > 0.0
-        && d.max_wheel_turns_per_s > 0.0)
-    {
-        return Err(LiveError::Config(
-            "devices.timeout_s, devices.poll_rate_hz, devices.ticks_per_revolution and devices.max_wheel_turns_per_s must be > 0"
-                .into(),
-        ));
-    }
+    d.validate()
+        .map_err(|e| LiveError::Config(e.in_table("devices").to_string()))?;
     let timeout = Duration::from_secs_f64(d.timeout_s);
     // Before the workers: every measurement is made after the recording's start.
     let clock = Clock::new();
