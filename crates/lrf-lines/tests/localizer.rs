@@ -229,26 +229,31 @@ fn bad_config_and_scans_are_named_errors() {
         LocalizerError::Setting(s) => s.to_string(),
         e => panic!("not a setting error: {e}"),
     };
-    assert_eq!(
-        setting(|c| c.robot.track = 0.0),
-        "robot.track: expected a finite number > 0, found 0"
-    );
-    assert_eq!(
-        setting(|c| c.robot.wheel_radius = 50.0),
-        "robot.wheel_radius: expected metres in (0, 2], found 50 (millimetres?)"
-    );
-    assert_eq!(
-        setting(|c| c.laser_mount.theta = 90.0),
-        "laser_mount.theta: expected radians within ±2π (6.283), found 90 (degrees?)"
-    );
-    assert_eq!(
-        setting(|c| c.compass.variance = 0.0),
-        "compass.variance: expected a finite number > 0, found 0"
-    );
-    assert_eq!(
-        setting(|c| c.matching.gate_probability = 2.0),
-        "matching.gate_probability: expected a probability in (0, 1), found 2"
-    );
+    let cases: [(fn(&mut LocalizerConfig), &str); 5] = [
+        (
+            |c| c.robot.track = 0.0,
+            "robot.track: expected a finite number > 0, found 0",
+        ),
+        (
+            |c| c.robot.wheel_radius = 50.0,
+            "robot.wheel_radius: expected metres in (0, 2], found 50 (millimetres?)",
+        ),
+        (
+            |c| c.laser_mount.theta = 90.0,
+            "laser_mount.theta: expected radians within ±2π (6.283), found 90 (degrees?)",
+        ),
+        (
+            |c| c.compass.variance = 0.0,
+            "compass.variance: expected a finite number > 0, found 0",
+        ),
+        (
+            |c| c.matching.gate_probability = 2.0,
+            "matching.gate_probability: expected a probability in (0, 1), found 2",
+        ),
+    ];
+    for (edit, message) in cases {
+        assert_eq!(setting(edit), message);
+    }
     // A group's own rules are named by the group.
     refused_in("compass", |c| c.compass.recover_after = 1);
     let e = refused_in("wheel_noise", |c| c.wheel_noise.delta = -1.0);
