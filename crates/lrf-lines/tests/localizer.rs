@@ -229,7 +229,8 @@ fn bad_config_and_scans_are_named_errors() {
         LocalizerError::Setting(s) => s.to_string(),
         e => panic!("not a setting error: {e}"),
     };
-    let cases: [(fn(&mut LocalizerConfig), &str); 5] = [
+    type Edit = fn(&mut LocalizerConfig);
+    let cases: [(Edit, &str); 5] = [
         (
             |c| c.robot.track = 0.0,
             "robot.track: expected a finite number > 0, found 0",
