@@ -46,6 +46,17 @@ pub struct MapBuildSummary {
     pub laser_mount_source: &'static str,
 }
 
+/// The summary as `ekf map build` prints it after the map's file name: one line.
+impl std::fmt::Display for MapBuildSummary {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        writeln!(
+            f,
+            "{} segments from {} scans ({} lines; {} scans skipped)",
+            self.segments, self.scans_used, self.lines, self.scans_skipped
+        )
+    }
+}
+
 /// Builds the map of `log` (see [`MapSource`]).
 pub fn build_map(
     log: &Path,
@@ -203,5 +214,21 @@ mod tests {
         assert_eq!(nearest(&r, 1_960_000_000).map(|p| p.x), Some(2.0));
         assert_eq!(nearest(&r, 1_500_000_000), None);
         assert_eq!(nearest(&r, 3_000_000_000), None);
+    }
+
+    #[test]
+    fn summary_as_printed() {
+        let s = MapBuildSummary {
+            scans_used: 440,
+            scans_skipped: 2,
+            lines: 1867,
+            segments: 268,
+            laser_mount: [0.0; 3],
+            laser_mount_source: "config",
+        };
+        assert_eq!(
+            s.to_string(),
+            "268 segments from 440 scans (1867 lines; 2 scans skipped)\n"
+        );
     }
 }

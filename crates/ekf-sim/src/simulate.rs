@@ -101,6 +101,28 @@ pub struct SimulateSummary {
     pub stats: SimStats,
 }
 
+/// The summary as `ekf simulate` prints it: one line.
+impl std::fmt::Display for SimulateSummary {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let s = &self.stats;
+        writeln!(
+            f,
+            "{}: {} ({} s, seed {}): {} messages, {} scans, {:.1} m driven, {} compass \
+             outliers, {} slips, closest to a wall {:.2} m",
+            self.out,
+            self.scenario,
+            self.duration_s,
+            self.seed,
+            self.messages,
+            s.scans,
+            s.distance_m,
+            s.compass_outliers,
+            s.slips,
+            s.min_clearance_m
+        )
+    }
+}
+
 /// A built-in scenario by name, or a user's room from a line map (a path ending in
 /// `.json`), with `options` applied.
 pub fn load_scenario(name: &str, options: &SimulateOptions) -> Result<Scenario, SimulateError> {
@@ -211,4 +233,33 @@ pub fn run_simulation(
         stats: run.stats,
     };
     Ok((run, summary))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn summary_as_printed() {
+        let s = SimulateSummary {
+            scenario: "paper".into(),
+            seed: 1,
+            out: "sim.mcap".into(),
+            duration_s: 20.0,
+            messages: 705,
+            stats: SimStats {
+                scans: 101,
+                distance_m: 6.04,
+                compass_outliers: 2,
+                slips: 0,
+                min_clearance_m: 0.951,
+                ..SimStats::default()
+            },
+        };
+        assert_eq!(
+            s.to_string(),
+            "sim.mcap: paper (20 s, seed 1): 705 messages, 101 scans, 6.0 m driven, 2 compass \
+             outliers, 0 slips, closest to a wall 0.95 m\n"
+        );
+    }
 }

@@ -100,6 +100,58 @@ pub struct EmulateSummary {
     pub truth: Option<String>,
 }
 
+/// The summary as `ekf emulate` prints it at the end: one line.
+impl std::fmt::Display for EmulateSummary {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{} (seed {}): {} steps, {} scans, {:.1} m driven",
+            self.scenario, self.seed, self.steps, self.scans, self.distance_m
+        )?;
+        if self.interrupted {
+            write!(f, ", interrupted")?;
+        }
+        if let Some(t) = &self.truth {
+            write!(f, ", {} true poses in {t}", self.truth_poses)?;
+        }
+        writeln!(f)
+    }
+}
+
+/// Where a started emulation's devices and configuration are: what `ekf emulate` prints
+/// for `ekf live` to be pointed at.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Connection {
+    /// The laser's link.
+    pub laser: PathBuf,
+    /// The base controller's link.
+    pub base: PathBuf,
+    /// The GPS's link.
+    pub gps: PathBuf,
+    /// The configuration written for `ekf live`.
+    pub config: PathBuf,
+}
+
+/// One line per device and the configuration, then the `ekf live` command line.
+impl std::fmt::Display for Connection {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let (laser, base, gps, config) = (
+            self.laser.display(),
+            self.base.display(),
+            self.gps.display(),
+            self.config.display(),
+        );
+        writeln!(f, "laser: {laser}")?;
+        writeln!(f, "base: {base}")?;
+        writeln!(f, "gps: {gps}")?;
+        writeln!(f, "config: {config}")?;
+        writeln!(
+            f,
+            "run: ekf live --laser {laser} --base {base} --gps {gps} --config {config}"
+        )
+    }
+}
+
 /// The emulators set up and waiting to be run.
 pub struct Emulation {
     scenario: Scenario,
@@ -216,9 +268,14 @@ impl Emulation {
         self.emulators.path(device)
     }
 
-    /// The configuration file written for `ekf live`.
-    pub fn config_path(&self) -> &Path {
-        &self.config
+    /// Where the devices and the configuration are.
+    pub fn connection(&self) -> Connection {
+        Connection {
+            laser: self.path(Device::Laser),
+            base: self.path(Device::Base),
+            gps: self.path(Device::Gps),
+            config: self.config.clone(),
+        }
     }
 
     /// Holds the robot until a host is connected, then drives the scenario in real time
@@ -413,5 +470,42 @@ mod tests {
         assert_eq!(Config::from_toml(&text, "live.toml").unwrap(), c);
         let sigma = c.localizer.compass.variance.sqrt().to_degrees();
         assert!(sigma > 0.1 && sigma < 0.11, "{sigma}");
+    }
+
+    #[test]
+    fn summary_and_connection_as_printed() {
+        let mut summary = EmulateSummary {
+            scenario: "paper".into(),
+            seed: 3,
+            steps: 120,
+            scans: 60,
+            distance_m: 4.26,
+            interrupted: false,
+            truth_poses: 0,
+            truth: None,
+        };
+        assert_eq!(
+            summary.to_string(),
+            "paper (seed 3): 120 steps, 60 scans, 4.3 m driven\n"
+        );
+        summary.interrupted = true;
+        summary.truth = Some("t.mcap".into());
+        summary.truth_poses = 99;
+        assert_eq!(
+            summary.to_string(),
+            "paper (seed 3): 120 steps, 60 scans, 4.3 m driven, interrupted, 99 true poses in \
+             t.mcap\n"
+        );
+        let c = Connection {
+            laser: "/d/laser".into(),
+            base: "/d/base".into(),
+            gps: "/d/gps".into(),
+            config: "/d/live.toml".into(),
+        };
+        assert_eq!(
+            c.to_string(),
+            "laser: /d/laser\nbase: /d/base\ngps: /d/gps\nconfig: /d/live.toml\nrun: ekf live \
+             --laser /d/laser --base /d/base --gps /d/gps --config /d/live.toml\n"
+        );
     }
 }

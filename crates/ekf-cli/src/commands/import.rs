@@ -18,6 +18,7 @@ use crate::ros2::build::{
 };
 use ekf_core::Pose2;
 use serde::Serialize;
+use std::fmt;
 use std::path::Path;
 
 /// The source log's format.
@@ -80,6 +81,32 @@ pub struct ImportSummary {
     pub stats: ImportStats,
     /// Messages written to the bag.
     pub messages_written: u64,
+}
+
+/// What the import wrote, as `ekf import` prints it after the bag's name: the message
+/// counts and time span, and the laser's range limit with its source.
+impl fmt::Display for ImportSummary {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let s = &self.stats;
+        writeln!(
+            f,
+            "{} messages ({} odometry, {} scans, {} reference, {} compass) over {:.1} s",
+            self.messages_written,
+            s.odometry,
+            s.scans,
+            s.references,
+            s.compass,
+            s.span_ns() as f64 * 1e-9
+        )?;
+        if let Some(r) = s.laser_range_max {
+            writeln!(
+                f,
+                "  laser readings from {:.2} m up are no return ({})",
+                r.value, r.source
+            )?;
+        }
+        Ok(())
+    }
 }
 
 /// Converts `input` into the ROS 2 bag `output`. On a malformed line, everything before
@@ -264,4 +291,49 @@ fn where_found(count: &RepairCount) -> String {
         lines.push("…".to_string());
     }
     format!("lines {}", lines.join(", "))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn summary_and_repairs_as_printed() {
+        let mut summary = ImportSummary {
+            stats: ImportStats {
+                odometry: 3,
+                scans: 2,
+                references: 2,
+                t_min_ns: Some(1_000_000_000),
+                t_max_ns: Some(3_500_000_000),
+                laser_range_max: Some(crate::import::RangeMax {
+                    value: 81.09,
+                    source: crate::import::RangeMaxSource::Saturation,
+                }),
+                ..ImportStats::default()
+            },
+            messages_written: 8,
+        };
+        assert_eq!(
+            summary.to_string(),
+            "8 messages (3 odometry, 2 scans, 2 reference, 0 compass) over 2.5 s\n  \
+             laser readings from 81.09 m up are no return (where the readings saturate)\n"
+        );
+        assert!(repair_lines(&summary.stats).is_empty());
+        summary.stats.time_repairs.negative = RepairCount {
+            count: 4,
+            first_lines: vec![3, 9],
+        };
+        summary.stats.duplicates = RepairCount {
+            count: 1,
+            first_lines: vec![12],
+        };
+        assert_eq!(
+            repair_lines(&summary.stats),
+            [
+                "4 timestamps negative repaired from their neighbours (lines 3, 9, …)",
+                "1 duplicate records left out (lines 12)"
+            ]
+        );
+    }
 }

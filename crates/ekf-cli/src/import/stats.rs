@@ -53,6 +53,17 @@ pub enum RangeMaxSource {
     Default,
 }
 
+/// Where the limit came from, as the import summary says it.
+impl std::fmt::Display for RangeMaxSource {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            RangeMaxSource::Saturation => "where the readings saturate",
+            RangeMaxSource::Param => "the log's PARAM robot_front_laser_max",
+            RangeMaxSource::Default => "--laser-max-range",
+        })
+    }
+}
+
 /// A log's laser range limit.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct RangeMax {

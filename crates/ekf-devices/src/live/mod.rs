@@ -82,6 +82,57 @@ pub enum LiveEvent {
     },
 }
 
+impl LiveEvent {
+    /// A pose as one JSON object (`ekf live --json` prints one per line): `t_ns`,
+    /// `fused_ns`, `x`, `y`, `theta`, `sigma_xy` (`[σx, σy]`) and `sigma_theta`. `None`
+    /// for a device event.
+    pub fn pose_json(&self) -> Option<serde_json::Value> {
+        match self {
+            LiveEvent::Pose {
+                t_ns,
+                fused_ns,
+                pose,
+                covariance,
+            } => Some(serde_json::json!({
+                "t_ns": t_ns, "fused_ns": fused_ns,
+                "x": pose.x, "y": pose.y, "theta": pose.theta,
+                "sigma_xy": [covariance[(0, 0)].sqrt(), covariance[(1, 1)].sqrt()],
+                "sigma_theta": covariance[(2, 2)].sqrt(),
+            })),
+            LiveEvent::Device { .. } => None,
+        }
+    }
+}
+
+/// One line as `ekf live` prints it: a pose with its time (s), position, heading, the
+/// position's σ (√(σx² + σy²)) and how long it has been predicted on odometry alone; or
+/// a device's message, prefixed `warning: ` when it is one.
+impl std::fmt::Display for LiveEvent {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            LiveEvent::Pose {
+                t_ns,
+                fused_ns,
+                pose,
+                covariance,
+            } => write!(
+                f,
+                "{:.3}  x {:8.3} m  y {:8.3} m  θ {:7.2}°  σxy {:.3} m  (odometry since {:.2} s)",
+                *t_ns as f64 * 1e-9,
+                pose.x,
+                pose.y,
+                pose.theta.to_degrees(),
+                (covariance[(0, 0)] + covariance[(1, 1)]).sqrt(),
+                t_ns.saturating_sub(*fused_ns) as f64 * 1e-9
+            ),
+            LiveEvent::Device { level, text, .. } => {
+                let what = if *level == 0 { "" } else { "warning: " };
+                write!(f, "{what}{text}")
+            }
+        }
+    }
+}
+
 /// Counts of everything that happened, per device and in the filter.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct LiveSummary {
@@ -106,6 +157,29 @@ pub struct LiveSummary {
     pub late_readings: u64,
     /// The recording, if any.
     pub recording: Option<String>,
+}
+
+/// The summary as `ekf live` prints it at the end: the filter's counts, each device's
+/// counters and reconnections, and the recording.
+impl std::fmt::Display for LiveSummary {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let s = &self.filter;
+        writeln!(
+            f,
+            "live: motion steps {}, scans {} (used {}), lines fused {}, compass fused {}",
+            s.motion_steps, s.lines.scans, s.lines.scans_used, s.lines.fused, s.compass.accepted
+        )?;
+        for (device, counters) in &self.devices {
+            writeln!(f, "  {device}: {counters}")?;
+        }
+        for (device, n) in &self.reconnects {
+            writeln!(f, "  {device}: reconnected {n} times")?;
+        }
+        if let Some(r) = &self.recording {
+            writeln!(f, "  recording: {r}")?;
+        }
+        Ok(())
+    }
 }
 
 /// Why a live run failed.
@@ -810,5 +884,61 @@ mod forecast_tests {
         // Nothing held back: the fused state at its own time.
         let now = fused.forecast(&[]).unwrap().unwrap();
         assert_eq!((now.t_ns, now.pose), (1_150_000_000, before.pose()));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn events_and_summary_as_printed() {
+        let pose = LiveEvent::Pose {
+            t_ns: 12_345_000_000,
+            fused_ns: 12_245_000_000,
+            pose: Pose2::new(1.5, -2.25, std::f64::consts::FRAC_PI_2),
+            covariance: Matrix3::from_diagonal(&nalgebra::Vector3::new(0.0009, 0.0016, 0.0001)),
+        };
+        assert_eq!(
+            pose.to_string(),
+            "12.345  x    1.500 m  y   -2.250 m  θ   90.00°  σxy 0.050 m  (odometry since 0.10 s)"
+        );
+        let json = pose.pose_json().unwrap();
+        assert_eq!(json["t_ns"], 12_345_000_000u64);
+        assert_eq!(json["sigma_xy"][1], 0.04);
+        assert_eq!(json["sigma_theta"], 0.01);
+        let warning = LiveEvent::Device {
+            device: "base",
+            level: 1,
+            text: "base: no reply".into(),
+        };
+        assert_eq!(warning.to_string(), "warning: base: no reply");
+        assert_eq!(warning.pose_json(), None);
+        let mut filter = ReplaySummary {
+            motion_steps: 10,
+            ..Default::default()
+        };
+        filter.lines.scans = 4;
+        filter.lines.scans_used = 3;
+        filter.lines.fused = 7;
+        filter.compass.accepted = 2;
+        let summary = LiveSummary {
+            filter,
+            devices: BTreeMap::from([("laser", serde_json::json!({"scans": 4}))]),
+            reconnects: BTreeMap::from([("base", 1)]),
+            base_repeated_samples: 0,
+            base_missed_samples: 0,
+            base_implausible_samples: 0,
+            compass_invalid: 0,
+            gps_fixes: 0,
+            late_readings: 0,
+            recording: Some("run.mcap: 40 messages".into()),
+        };
+        assert_eq!(
+            summary.to_string(),
+            "live: motion steps 10, scans 4 (used 3), lines fused 7, compass fused 2\n  \
+             laser: {\"scans\":4}\n  base: reconnected 1 times\n  recording: run.mcap: 40 \
+             messages\n"
+        );
     }
 }

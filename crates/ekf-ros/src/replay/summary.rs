@@ -1,7 +1,9 @@
-//! The JSON summary of a replay (`ekf replay --json`), and the per-stage timing record.
+//! The summary of a replay (`ekf replay`'s table, `--json`'s object), and the per-stage
+//! timing record.
 
 use serde::Serialize;
 use std::collections::BTreeMap;
+use std::fmt;
 
 /// Median and 99th percentile of one stage's durations (µs).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
@@ -186,6 +188,104 @@ impl ReplaySummary {
     }
 }
 
+/// The summary as `ekf replay` prints it: one line per stage, lines of what did not
+/// happen (GPS, tracking losses, skipped messages) left out.
+impl fmt::Display for ReplaySummary {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(
+            f,
+            "{} ({}, map: {}, {} segments)",
+            self.log, self.mode, self.map, self.map_segments
+        )?;
+        let l = &self.lines;
+        writeln!(
+            f,
+            "  motion steps {}, poses written {}, scans {} (used {})",
+            self.motion_steps, self.poses_written, l.scans, l.scans_used
+        )?;
+        writeln!(
+            f,
+            "  lines: extracted {}, matched {}, rejected {}, fused {}, refused {}",
+            l.extracted, l.matched, l.rejected, l.fused, l.refused
+        )?;
+        let c = &self.compass;
+        writeln!(
+            f,
+            "  compass: fused {} ({} to end a gate lock-out), rejected {}",
+            c.accepted, c.recovered, c.rejected
+        )?;
+        if self.gps.accepted + self.gps.rejected > 0 {
+            writeln!(
+                f,
+                "  gps: fused {}, rejected {}",
+                self.gps.accepted, self.gps.rejected
+            )?;
+        }
+        if let Some(a) = &self.accuracy {
+            writeln!(
+                f,
+                "  accuracy vs reference ({} poses): position RMSE {:.3} m (median {:.3}, p95 \
+                 {:.3}, max {:.3} m; over 1 m on {:.1} %), heading RMSE {:.2}°",
+                a.matched_poses,
+                a.position_rmse_m,
+                a.position_median_m,
+                a.position_p95_m,
+                a.position_max_m,
+                100.0 * a.share_over_1m,
+                a.heading_rmse_deg
+            )?;
+        }
+        let t = &self.timings;
+        writeln!(
+            f,
+            "  per scan (median/p99 µs): extraction {:.1}/{:.1}, matching {:.1}/{:.1}, update \
+             {:.1}/{:.1}",
+            t.extraction.median_us,
+            t.extraction.p99_us,
+            t.matching.median_us,
+            t.matching.p99_us,
+            t.update.median_us,
+            t.update.p99_us
+        )?;
+        if let Some(w) = self.warnings.first() {
+            writeln!(
+                f,
+                "  {} messages skipped, e.g. {} at {} ns: {}",
+                self.warning_count, w.topic, w.log_time_ns, w.reason
+            )?;
+        }
+        let k = &self.tracking;
+        if k.losses + k.searches > 0 || k.locked_on_scan.is_some() {
+            write!(
+                f,
+                "  tracking: lost {} times ({} motion gaps), {} scans lost, {} relocalizations \
+                 ({} searches, {} refused)",
+                k.losses, k.motion_gaps, k.scans_lost, k.relocalizations, k.searches, k.refused
+            )?;
+            if let Some(n) = k.locked_on_scan {
+                write!(f, "; locked on at scan {n}")?;
+            }
+            if k.lost_at_end > 0 {
+                write!(f, "; lost at the end")?;
+            }
+            writeln!(f)?;
+        }
+        let c = &self.consistency;
+        if let Some(nis) = c.nis_per_dof {
+            writeln!(
+                f,
+                "  line innovations: NIS per dof {nis:.2}; over-confident on {} of {} scans ({} \
+                 stretches)",
+                c.over_confident_scans, c.scans, c.over_confident_stretches
+            )?;
+        }
+        for note in &self.notes {
+            writeln!(f, "  note: {note}")?;
+        }
+        writeln!(f, "  wall time {:.2} s", self.wall_time_s)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -205,5 +305,45 @@ mod tests {
         h.record(0.0);
         h.record(1e12);
         assert_eq!(h.timing().count, 202);
+    }
+
+    #[test]
+    fn table_shows_only_what_happened() {
+        let mut s = ReplaySummary {
+            log: "run.mcap".into(),
+            mode: "laser".into(),
+            map: "first scan".into(),
+            map_segments: 5,
+            motion_steps: 600,
+            poses_written: 601,
+            wall_time_s: 0.123,
+            ..ReplaySummary::default()
+        };
+        s.lines.scans = 301;
+        s.lines.scans_used = 300;
+        let quiet = "run.mcap (laser, map: first scan, 5 segments)\n  \
+            motion steps 600, poses written 601, scans 301 (used 300)\n  \
+            lines: extracted 0, matched 0, rejected 0, fused 0, refused 0\n  \
+            compass: fused 0 (0 to end a gate lock-out), rejected 0\n  \
+            per scan (median/p99 µs): extraction 0.0/0.0, matching 0.0/0.0, update 0.0/0.0\n  \
+            wall time 0.12 s\n";
+        assert_eq!(s.to_string(), quiet);
+        s.gps.accepted = 3;
+        s.warn("/scan", 42, "bad".into());
+        s.tracking.searches = 2;
+        s.tracking.locked_on_scan = Some(7);
+        s.tracking.lost_at_end = 1;
+        s.notes.push("look".into());
+        let text = s.to_string();
+        for line in [
+            "  gps: fused 3, rejected 0\n",
+            "  1 messages skipped, e.g. /scan at 42 ns: bad\n",
+            "  tracking: lost 0 times (0 motion gaps), 0 scans lost, 0 relocalizations (2 \
+             searches, 0 refused); locked on at scan 7; lost at the end\n",
+            "  note: look\n",
+        ] {
+            assert!(text.contains(line), "{line:?} missing from {text}");
+        }
+        assert_eq!(text.lines().count(), quiet.lines().count() + 4);
     }
 }
