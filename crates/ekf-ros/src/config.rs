@@ -342,20 +342,20 @@ impl Config {
         self.fusion(ekf_fusion::Mode::default())
             .validate()
             .map_err(|e| {
-                let (group, message) = match e {
+                let (key, message) = match e {
                     FusionError::Setting(e) => return setting(fusion_key_in_file(e)),
                     FusionError::Localizer(LocalizerError::Config { group, error }) => {
-                        (group, error.to_string())
+                        (format!("localizer.{group}"), error.to_string())
                     }
                     FusionError::Localizer(LocalizerError::Extraction(e)) => {
-                        ("extraction", e.to_string())
+                        ("localizer.extraction".into(), e.to_string())
                     }
-                    other => ("", other.to_string()),
+                    other => ("localizer".into(), other.to_string()),
                 };
                 ConfigError::Invalid {
                     path: path.into(),
                     line: None,
-                    key: format!("localizer.{group}").trim_end_matches('.').into(),
+                    key,
                     message,
                 }
             })?;
