@@ -67,6 +67,13 @@ impl LocalizerConfig {
     /// extraction, matching). Keys are named from this table (`robot.track`); the
     /// [`Localizer`](super::Localizer) refuses a configuration that fails this.
     pub fn validate(&self) -> Result<(), LocalizerError> {
+        self.validated_parts().map(|_| ())
+    }
+
+    /// [`validate`](Self::validate), returning the compass gate, matcher and extractor
+    /// it had to build to check their groups, so the [`Localizer`](super::Localizer)
+    /// does not build them again.
+    pub(super) fn validated_parts(&self) -> Result<ValidatedParts, LocalizerError> {
         let ranges = [
             (
                 "robot.wheel_radius",
@@ -129,7 +136,7 @@ impl LocalizerConfig {
             .validated("laser mount")
             .map_err(cfg("laser_mount"))?;
         Compass::new(0.0, self.compass.variance).map_err(cfg("compass"))?;
-        ChiSquareGate::<f64>::from_probability(self.compass.gate_probability, 1)
+        let compass_gate = ChiSquareGate::from_probability(self.compass.gate_probability, 1)
             .map_err(cfg("compass"))?;
         if self.compass.recover_after == 1 {
             return Err(LocalizerError::Config {
@@ -140,10 +147,22 @@ impl LocalizerConfig {
                 },
             });
         }
-        Matcher::new(self.matching).map_err(cfg("matching"))?;
-        LineExtractor::new(self.extraction)?;
-        Ok(())
+        Ok(ValidatedParts {
+            compass_gate,
+            matcher: Matcher::new(self.matching).map_err(cfg("matching"))?,
+            extractor: LineExtractor::new(self.extraction)?,
+        })
     }
+}
+
+/// The parts of a [`Localizer`](super::Localizer) that checking a configuration builds.
+pub(super) struct ValidatedParts {
+    /// The compass innovation gate (1 dof).
+    pub compass_gate: ChiSquareGate<f64>,
+    /// The line matcher.
+    pub matcher: Matcher,
+    /// The line extractor.
+    pub extractor: LineExtractor,
 }
 
 /// A laser mount table in which every key is optional (0 when missing).

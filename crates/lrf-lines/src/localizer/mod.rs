@@ -13,6 +13,7 @@ pub use error::LocalizerError;
 
 use compass_follow::{CompassFollow, FOLLOW_PROBABILITY};
 use compass_lockout::{CompassLockout, Rejected};
+use config::ValidatedParts;
 use map_errors::MapErrors;
 
 use crate::relocalize::{
@@ -203,17 +204,11 @@ impl Localizer {
         initial_covariance: Matrix3<f64>,
         map: LineMap,
     ) -> Result<Self, LocalizerError> {
-        config.validate()?;
-        let compass_gate = ChiSquareGate::from_probability(config.compass.gate_probability, 1)
-            .map_err(|error| LocalizerError::Config {
-                group: "compass",
-                error,
-            })?;
-        let matcher = Matcher::new(config.matching).map_err(|error| LocalizerError::Config {
-            group: "matching",
-            error,
-        })?;
-        let extractor = LineExtractor::new(config.extraction)?;
+        let ValidatedParts {
+            compass_gate,
+            matcher,
+            extractor,
+        } = config.validated_parts()?;
         let ekf = Ekf::new(initial_pose, initial_covariance).map_err(LocalizerError::Filter)?;
         Ok(Self {
             config,
