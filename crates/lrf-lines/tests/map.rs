@@ -328,3 +328,46 @@ proptest! {
         prop_assert_eq!(LineMap::from_json(&map.to_json().unwrap()).unwrap(), map);
     }
 }
+
+#[test]
+fn a_long_corridor_gives_one_wall_per_piece_between_doors() {
+    // 200 m of corridor, a 1 m door every 4 m on both sides, scans every 0.2 m seeing the
+    // pieces within 8 m: the walls spread over many cells of the builder's index, and each
+    // piece must still come out once, with its extent.
+    let mut rng = Rng::new(3);
+    let pieces = |x: f64| {
+        let first = ((x - 8.0) / 4.0).floor().max(0.0) as i64;
+        let last = (((x + 8.0) / 4.0).ceil() as i64).min(50);
+        (first..last).flat_map(|i| {
+            let x0 = 4.0 * i as f64;
+            [-1.5, 1.5].map(|y| -> Wall { (Point2::new(x0, y), Point2::new(x0 + 3.0, y)) })
+        })
+    };
+    let scans: Vec<_> = (0..1000)
+        .map(|k| {
+            let sensor = Pose2::new(0.2 * f64::from(k), 0.0, 0.0);
+            let lines: Vec<_> = pieces(sensor.x)
+                .map(|w| observe_part(&w, 0.0, 1.0, &sensor, NOISE, Some(&mut rng)))
+                .collect();
+            (lines, sensor)
+        })
+        .collect();
+    let map = LineMap::from_run(
+        scans.iter().map(|(l, p)| (l.as_slice(), *p)),
+        &MapBuilderParams::default(),
+    )
+    .unwrap();
+    assert_eq!(map.len(), 100);
+    for s in &map.segments {
+        let (lo, hi) = (s.start.x.min(s.end.x), s.start.x.max(s.end.x));
+        let x0 = 4.0 * (lo / 4.0).round();
+        assert!(
+            (s.start.y.abs() - 1.5).abs() < 0.01 && (s.end.y.abs() - 1.5).abs() < 0.01,
+            "{s:?}"
+        );
+        assert!(
+            (lo - x0).abs() < 0.05 && (hi - (x0 + 3.0)).abs() < 0.05,
+            "{s:?}"
+        );
+    }
+}

@@ -1,6 +1,7 @@
 //! Building a map from a whole run: repeated sightings of the same wall are fused into
 //! one segment.
 
+use super::wall_index::WallIndex;
 use super::{interval_along, point_on_line, LineMap, MapSegment};
 use crate::matching::{non_negative_params, validate_observed};
 use crate::ObservedLine;
@@ -65,7 +66,9 @@ struct Wall {
 /// 2. are collinear neighbours: projected onto the wall's line, the two segments overlap
 ///    or leave a gap of at most `max_gap`.
 ///
-/// If no wall qualifies, the sighting starts a new wall. Fusion weights by information
+/// Only walls that come within `max_gap +` [`NEAR_M`] of the sighting are tested (found
+/// through a spatial index, so the cost of a sighting does not grow with the map). If no
+/// wall qualifies, the sighting starts a new wall. Fusion weights by information
 /// (`K = Σ_wall (Σ_wall + Σ)⁻¹`, `x = x_wall + K d`, `Σ_wall ← (I − K) Σ_wall`) and the
 /// extent becomes the union of both segments' projections onto the fused line.
 /// [`finish`](Self::finish) then merges walls that the same test joins (a sighting can
@@ -76,8 +79,19 @@ pub struct MapBuilder {
     params: MapBuilderParams,
     gate: ChiSquareGate<f64>,
     tolerance: Matrix2<f64>,
-    walls: Vec<Wall>,
+    /// Every wall started so far, in the order first seen; `None` once merged into an
+    /// earlier one by `finish`.
+    walls: Vec<Option<Wall>>,
+    index: WallIndex,
+    /// Scratch for the candidates of one query (kept to not allocate per sighting).
+    candidates: Vec<usize>,
 }
+
+/// How far apart, besides `max_gap` along the line, two segments may be and still be
+/// tested as the same wall (m). Walls the gate joins are far closer: their separation
+/// where they overlap has the spread of the line fits plus `tolerance_rho` (centimetres),
+/// so a metre only matters for walls no test would join.
+pub const NEAR_M: f64 = 1.0;
 
 impl MapBuilder {
     /// A builder with `params`. Fails on a gate probability outside (0, 1), a negative or
@@ -98,6 +112,8 @@ impl MapBuilder {
             gate,
             tolerance,
             walls: Vec::new(),
+            index: WallIndex::default(),
+            candidates: Vec::new(),
         })
     }
 
@@ -108,7 +124,7 @@ impl MapBuilder {
 
     /// Number of walls so far (before the merging and filtering of `finish`).
     pub fn num_walls(&self) -> usize {
-        self.walls.len()
+        self.walls.iter().flatten().count()
     }
 
     /// Adds the lines of one scan taken at `sensor_pose` (robot pose ⊕ laser mount).
@@ -139,45 +155,82 @@ impl MapBuilder {
         let segments = self
             .walls
             .iter()
+            .flatten()
             .filter(|w| w.sightings >= min)
             .filter_map(|w| MapSegment::from_points(w.start, w.end).ok())
             .collect();
         LineMap::new(segments)
     }
 
+    /// Fuses `sighting` into the nearest wall that passes the test, or starts a wall.
     fn add_wall(&mut self, sighting: Wall) {
+        self.find_candidates(&sighting);
         let best = self
-            .walls
+            .candidates
             .iter()
-            .enumerate()
-            .filter_map(|(i, w)| self.distance(w, &sighting).map(|d2| (i, d2)))
+            .filter_map(|&i| {
+                let wall = self.walls[i].as_ref()?;
+                self.distance(wall, &sighting).map(|d2| (i, d2))
+            })
             .min_by(|a, b| a.1.total_cmp(&b.1));
         match best {
-            Some((i, _)) => self.walls[i] = fuse(&self.walls[i], &sighting),
-            None => self.walls.push(sighting),
+            Some((i, _)) => self.fuse_into(i, &sighting),
+            None => {
+                self.index
+                    .insert(self.walls.len(), &sighting.start, &sighting.end);
+                self.walls.push(Some(sighting));
+            }
         }
     }
 
     /// Fuses pairs of walls that pass the test until none does; the earlier wall absorbs
-    /// the later one.
+    /// the later ones, in the order they were first seen.
     fn merge_walls(&mut self) {
-        let mut i = 0;
-        while i < self.walls.len() {
-            let mut j = i + 1;
-            let mut merged = false;
-            while j < self.walls.len() {
-                if self.distance(&self.walls[i], &self.walls[j]).is_some() {
-                    let other = self.walls.remove(j);
-                    self.walls[i] = fuse(&self.walls[i], &other);
+        for i in 0..self.walls.len() {
+            // A grown wall may reach walls it was tested against before: go on until a
+            // pass over the later walls merges none.
+            loop {
+                let mut merged = false;
+                let mut after = i;
+                while let Some(j) = self.next_mergeable(i, after) {
+                    let Some(other) = self.walls[j].take() else {
+                        break;
+                    };
+                    self.fuse_into(i, &other);
                     merged = true;
-                } else {
-                    j += 1;
+                    after = j;
+                }
+                if !merged {
+                    break;
                 }
             }
-            // A grown wall may now reach walls it was tested against before.
-            if !merged {
-                i += 1;
-            }
+        }
+    }
+
+    /// The first wall after index `after` that wall `i` (if still a wall) would absorb.
+    fn next_mergeable(&mut self, i: usize, after: usize) -> Option<usize> {
+        let wall = self.walls[i]?;
+        self.find_candidates(&wall);
+        self.candidates.iter().copied().find(|&j| {
+            j > after
+                && self.walls[j]
+                    .as_ref()
+                    .is_some_and(|other| self.distance(&wall, other).is_some())
+        })
+    }
+
+    /// Fills `candidates` with the walls near `wall` (see [`NEAR_M`]).
+    fn find_candidates(&mut self, wall: &Wall) {
+        let reach = self.params.max_gap + NEAR_M;
+        self.index
+            .near(&wall.start, &wall.end, reach, &mut self.candidates);
+    }
+
+    /// Replaces wall `i` with its fusion with `other` and indexes its new extent.
+    fn fuse_into(&mut self, i: usize, other: &Wall) {
+        if let Some(wall) = self.walls[i].as_mut() {
+            *wall = fuse(wall, other);
+            self.index.insert(i, &wall.start, &wall.end);
         }
     }
 

@@ -5,8 +5,9 @@
 mod builder;
 mod json;
 mod json_path;
+mod wall_index;
 
-pub use builder::{MapBuilder, MapBuilderParams};
+pub use builder::{MapBuilder, MapBuilderParams, NEAR_M};
 pub use json::{MapFormatError, MapFormatErrorKind, MAP_FORMAT, MAP_FORMAT_VERSION};
 
 use crate::ObservedLine;
