@@ -2,6 +2,7 @@
 //! The doc comments are the `--help` text.
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
+use ekf_cli::commands::grid::GridImportParams;
 use std::path::PathBuf;
 
 /// EKF localization with wheel odometry, a compass and 2-D laser line features.
@@ -66,6 +67,15 @@ pub enum MapAction {
     /// Build a line map (JSON) from a bag: from its first scan (the paper's global map),
     /// or with --from-truth from every scan placed along the log's reference trajectory.
     Build(MapBuildArgs),
+    /// Extract the walls of a ROS occupancy-grid map (map_server / Nav2 YAML with a PGM or
+    /// PNG image) as a line map, by casting virtual laser scans through its free space.
+    ImportGrid(MapImportGridArgs),
+    /// Draw a line map as a ROS occupancy-grid map: a Nav2 YAML and a trinary PGM beside it
+    /// (walls occupied, the rest of the bounding box free).
+    ExportGrid(MapExportGridArgs),
+    /// Compare a line map with a reference map: the share of the reference's wall length
+    /// matched within 0.1 m and 2°, and the map's wall length with no counterpart.
+    Compare(MapCompareArgs),
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -399,6 +409,69 @@ pub struct MapBuildArgs {
     /// Configuration file (TOML): topics, laser mount, extraction parameters.
     #[arg(long)]
     pub config: Option<PathBuf>,
+    /// Print the summary as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// The arguments of `ekf map import-grid`.
+#[derive(Debug, Args)]
+pub struct MapImportGridArgs {
+    /// The map's YAML file (`image`, `resolution`, `origin`, `negate`, `occupied_thresh`,
+    /// `free_thresh`, optional `mode`), as map_server, Nav2's map_saver, slam_toolbox,
+    /// Cartographer and GMapping save it.
+    pub yaml: PathBuf,
+    /// The line map (JSON) to write.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Spacing of the virtual scan positions over the free cells (m).
+    #[arg(long, default_value_t = GridImportParams::default().scan_spacing)]
+    pub scan_spacing: f64,
+    /// Range of the virtual laser (m).
+    #[arg(long, default_value_t = GridImportParams::default().max_range)]
+    pub max_range: f64,
+    /// Keep walls seen from at least this many scan positions.
+    #[arg(long, default_value_t = GridImportParams::default().min_sightings)]
+    pub min_sightings: u32,
+    /// Configuration file (TOML): the line extraction parameters.
+    #[arg(long)]
+    pub config: Option<PathBuf>,
+    /// Print the summary as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// The arguments of `ekf map compare`.
+#[derive(Debug, Args)]
+pub struct MapCompareArgs {
+    /// The line map (JSON) to judge.
+    pub map: PathBuf,
+    /// The reference line map (JSON).
+    #[arg(long)]
+    pub reference: PathBuf,
+    /// Move the map onto the reference first by a rigid alignment (ICP of its walls to the
+    /// reference's, from the identity).
+    #[arg(long)]
+    pub align: bool,
+    /// Print the result as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// The arguments of `ekf map export-grid`.
+#[derive(Debug, Args)]
+pub struct MapExportGridArgs {
+    /// The line map (JSON).
+    pub map: PathBuf,
+    /// The YAML file to write; the PGM image gets the same name with `.pgm`.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Side of a cell (m).
+    #[arg(long, default_value_t = 0.05)]
+    pub resolution: f64,
+    /// Free border around the walls' bounding box (m).
+    #[arg(long, default_value_t = 1.0)]
+    pub margin: f64,
     /// Print the summary as JSON.
     #[arg(long)]
     pub json: bool,

@@ -9,16 +9,18 @@ mod args;
 use args::{
     Cli, CliMode, CliSteering, Command, CompareArgs, ConfigArgs, CorpusArgs, EmulateArgs,
     EvaluateArgs, ExperimentArgs, Figure, Flavour, ImportCarmenArgs, ImportFormat, ImportMrptArgs,
-    LiveArgs, MapAction, MapBuildArgs, ReplayArgs, SimulateArgs,
+    LiveArgs, MapAction, MapBuildArgs, MapCompareArgs, MapExportGridArgs, MapImportGridArgs,
+    ReplayArgs, SimulateArgs,
 };
 use clap::Parser;
 use ekf_cli::commands::{
-    self, compare, corpus, emulate, evaluate, experiment, figures, import, map, simulate,
+    self, compare, corpus, emulate, evaluate, experiment, figures, grid, import, map, simulate,
 };
 use ekf_cli::config::{Config, DEFAULT_TOML};
 use ekf_cli::import::{CarmenFlavour, CarmenOptions, SyntheticCompass};
 use ekf_cli::live;
 use ekf_cli::replay::{self, Mode, ReplayOptions};
+use ekf_ros::map_compare;
 use serde::Serialize;
 use std::io::IsTerminal;
 use std::path::Path;
@@ -109,6 +111,15 @@ fn main() -> ExitCode {
         Command::Map {
             action: MapAction::Build(a),
         } => map_build_command(a),
+        Command::Map {
+            action: MapAction::ImportGrid(a),
+        } => map_import_grid_command(a),
+        Command::Map {
+            action: MapAction::ExportGrid(a),
+        } => map_export_grid_command(a),
+        Command::Map {
+            action: MapAction::Compare(a),
+        } => map_compare_command(a),
         Command::Import {
             format: ImportFormat::Carmen(a),
         } => import_carmen_command(a),
@@ -320,6 +331,49 @@ fn map_build_command(a: MapBuildArgs) -> Outcome {
         a.json,
         format_args!("{}: {summary}", a.out.display()),
     )
+}
+
+fn map_import_grid_command(a: MapImportGridArgs) -> Outcome {
+    let config = load_config(a.config.as_deref())?;
+    let params = grid::GridImportParams {
+        scan_spacing: a.scan_spacing,
+        min_sightings: a.min_sightings,
+        max_range: a.max_range,
+        ..Default::default()
+    };
+    let (line_map, summary) = grid::import(&a.yaml, &config.localizer.extraction, &params)?;
+    let text = line_map.to_json()?;
+    create_parent(&a.out)?;
+    std::fs::write(&a.out, text).map_err(|e| format!("{}: {e}", a.out.display()))?;
+    print_result(
+        &summary,
+        a.json,
+        format_args!("{}: {summary}", a.out.display()),
+    )
+}
+
+fn map_export_grid_command(a: MapExportGridArgs) -> Outcome {
+    let line_map = ekf_ros::replay::load_map(&a.map)?;
+    create_parent(&a.out)?;
+    let summary = grid::export(&line_map, &a.map, &a.out, a.resolution, a.margin)?;
+    print_result(
+        &summary,
+        a.json,
+        format_args!("{}: {summary}", a.out.display()),
+    )
+}
+
+fn map_compare_command(a: MapCompareArgs) -> Outcome {
+    let line_map = ekf_ros::replay::load_map(&a.map)?;
+    let reference = ekf_ros::replay::load_map(&a.reference)?;
+    let identity = ekf_core::Pose2::new(0.0, 0.0, 0.0);
+    let alignment = if a.align {
+        map_compare::align(&line_map, &reference, &identity)
+    } else {
+        identity
+    };
+    let comparison = map_compare::compare(&line_map, &reference, &alignment, &Default::default());
+    print_result(&comparison, a.json, &comparison)
 }
 
 fn import_carmen_command(a: ImportCarmenArgs) -> Outcome {

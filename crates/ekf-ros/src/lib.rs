@@ -11,10 +11,15 @@ pub mod config;
 pub mod devices_config;
 pub mod eval;
 pub mod geo;
+pub mod grid;
 pub mod map_build;
+pub mod map_compare;
 pub mod mcap_io;
 pub mod output_dir;
 pub mod replay;
 pub mod ros2;
 pub mod trajectory;
 pub mod tum;
+
+#[cfg(test)]
+mod test_support;

@@ -9,6 +9,7 @@ pub mod experiment;
 pub mod figures;
 pub mod import;
 
+pub use ekf_ros::grid;
 pub use ekf_ros::map_build as map;
 pub use ekf_ros::output_dir::create_output_dir;
 pub use ekf_sim::simulate;
