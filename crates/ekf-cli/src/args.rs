@@ -76,6 +76,8 @@ pub enum MapAction {
     /// Compare a line map with a reference map: the share of the reference's wall length
     /// matched within 0.1 m and 2°, and the map's wall length with no counterpart.
     Compare(MapCompareArgs),
+    /// Draw a line map to scale as SVG, with trajectories (TUM) over it.
+    Plot(MapPlotArgs),
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -439,6 +441,19 @@ pub struct MapImportGridArgs {
     /// Print the summary as JSON.
     #[arg(long)]
     pub json: bool,
+}
+
+/// The arguments of `ekf map plot`.
+#[derive(Debug, Args)]
+pub struct MapPlotArgs {
+    /// The line map (JSON).
+    pub map: PathBuf,
+    /// The SVG file to write.
+    #[arg(long)]
+    pub svg: PathBuf,
+    /// A trajectory (TUM text) to draw over the map, named by its file; may be repeated.
+    #[arg(long)]
+    pub trajectory: Vec<PathBuf>,
 }
 
 /// The arguments of `ekf map compare`.

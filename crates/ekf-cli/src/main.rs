@@ -10,7 +10,7 @@ use args::{
     Cli, CliMode, CliSteering, Command, CompareArgs, ConfigArgs, CorpusArgs, EmulateArgs,
     EvaluateArgs, ExperimentArgs, Figure, Flavour, ImportCarmenArgs, ImportFormat, ImportMrptArgs,
     LiveArgs, MapAction, MapBuildArgs, MapCompareArgs, MapExportGridArgs, MapImportGridArgs,
-    ReplayArgs, SimulateArgs,
+    MapPlotArgs, ReplayArgs, SimulateArgs,
 };
 use clap::Parser;
 use ekf_cli::commands::{
@@ -120,6 +120,9 @@ fn main() -> ExitCode {
         Command::Map {
             action: MapAction::Compare(a),
         } => map_compare_command(a),
+        Command::Map {
+            action: MapAction::Plot(a),
+        } => map_plot_command(a),
         Command::Import {
             format: ImportFormat::Carmen(a),
         } => import_carmen_command(a),
@@ -374,6 +377,27 @@ fn map_compare_command(a: MapCompareArgs) -> Outcome {
     };
     let comparison = map_compare::compare(&line_map, &reference, &alignment, &Default::default());
     print_result(&comparison, a.json, &comparison)
+}
+
+fn map_plot_command(a: MapPlotArgs) -> Outcome {
+    let line_map = ekf_ros::replay::load_map(&a.map)?;
+    let trajectories = a
+        .trajectory
+        .iter()
+        .map(|p| Ok((file_name(p), ekf_ros::tum::read_tum_file(p)?)))
+        .collect::<Result<Vec<_>, Box<dyn std::error::Error>>>()?;
+    let mut svg = Vec::new();
+    commands::map_plot::plot_map(&mut svg, &line_map, &trajectories, &file_name(&a.map))
+        .map_err(|e| format!("{}: {e}", a.svg.display()))?;
+    create_parent(&a.svg)?;
+    std::fs::write(&a.svg, svg).map_err(|e| format!("{}: {e}", a.svg.display()))?;
+    println!(
+        "{}: {} walls, {} trajectories",
+        a.svg.display(),
+        line_map.len(),
+        trajectories.len()
+    );
+    Ok(())
 }
 
 fn import_carmen_command(a: ImportCarmenArgs) -> Outcome {

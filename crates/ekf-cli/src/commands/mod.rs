@@ -8,6 +8,7 @@ pub mod evaluate;
 pub mod experiment;
 pub mod figures;
 pub mod import;
+pub mod map_plot;
 
 pub use ekf_ros::grid;
 pub use ekf_ros::map_build as map;
