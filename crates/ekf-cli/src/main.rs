@@ -108,21 +108,7 @@ fn main() -> ExitCode {
         Command::Simulate(a) => simulate_command(a),
         Command::Live(a) => live_command(a),
         Command::Emulate(a) => emulate_command(a),
-        Command::Map {
-            action: MapAction::Build(a),
-        } => map_build_command(a),
-        Command::Map {
-            action: MapAction::ImportGrid(a),
-        } => map_import_grid_command(a),
-        Command::Map {
-            action: MapAction::ExportGrid(a),
-        } => map_export_grid_command(a),
-        Command::Map {
-            action: MapAction::Compare(a),
-        } => map_compare_command(a),
-        Command::Map {
-            action: MapAction::Plot(a),
-        } => map_plot_command(a),
+        Command::Map { action } => map_command(action),
         Command::Import {
             format: ImportFormat::Carmen(a),
         } => import_carmen_command(a),
@@ -316,6 +302,24 @@ fn emulate_command(a: EmulateArgs) -> Outcome {
     Ok(())
 }
 
+fn map_command(action: MapAction) -> Outcome {
+    match action {
+        MapAction::Build(a) => map_build_command(a),
+        MapAction::ImportGrid(a) => map_import_grid_command(a),
+        MapAction::ExportGrid(a) => map_export_grid_command(a),
+        MapAction::Compare(a) => map_compare_command(a),
+        MapAction::Plot(a) => map_plot_command(a),
+    }
+}
+
+/// Writes `map` as JSON to `path`, creating its folder.
+fn write_map(map: &lrf_lines::LineMap, path: &Path) -> Outcome {
+    let text = map.to_json()?;
+    create_parent(path)?;
+    std::fs::write(path, text).map_err(|e| format!("{}: {e}", path.display()))?;
+    Ok(())
+}
+
 fn map_build_command(a: MapBuildArgs) -> Outcome {
     let config = load_config(a.config.as_deref())?;
     let source = if a.from_truth {
@@ -326,9 +330,7 @@ fn map_build_command(a: MapBuildArgs) -> Outcome {
         }
     };
     let (line_map, summary) = map::build_map(&a.log, &config, source)?;
-    let text = line_map.to_json()?;
-    create_parent(&a.out)?;
-    std::fs::write(&a.out, text).map_err(|e| format!("{}: {e}", a.out.display()))?;
+    write_map(&line_map, &a.out)?;
     print_result(
         &summary,
         a.json,
@@ -345,9 +347,7 @@ fn map_import_grid_command(a: MapImportGridArgs) -> Outcome {
         ..Default::default()
     };
     let (line_map, summary) = grid::import(&a.yaml, &config.localizer.extraction, &params)?;
-    let text = line_map.to_json()?;
-    create_parent(&a.out)?;
-    std::fs::write(&a.out, text).map_err(|e| format!("{}: {e}", a.out.display()))?;
+    write_map(&line_map, &a.out)?;
     print_result(
         &summary,
         a.json,
