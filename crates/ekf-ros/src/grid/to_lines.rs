@@ -95,6 +95,9 @@ pub enum GridImportError {
     /// The extraction parameters were refused.
     #[error("grid import: {0}")]
     Extraction(#[from] lrf_lines::ExtractionError),
+    /// The map builder's parameters were refused.
+    #[error("grid import: map builder: {0}")]
+    Builder(#[from] ekf_core::Error),
     /// No walls were found.
     #[error("no walls found: {scans} virtual scans from the free cells saw no wall of at least {min_sightings} sightings")]
     NoWalls {
@@ -142,12 +145,7 @@ pub fn walls_of(
         min_sightings: params.min_sightings,
         ..MapBuilderParams::default()
     };
-    let mut builder =
-        MapBuilder::new(builder_params).map_err(|_| GridImportError::BadParameter {
-            name: "min_sightings",
-            expected: "a count",
-            value: f64::from(params.min_sightings),
-        })?;
+    let mut builder = MapBuilder::new(builder_params)?;
     let (free_cells, occupied_cells, unknown_cells) = grid.counts();
     let mut summary = GridImportSummary {
         width: grid.width,
