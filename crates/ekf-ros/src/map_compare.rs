@@ -166,17 +166,10 @@ fn nearest<'a>(
             let d = angle_diff(s.line.beta, beta).abs();
             d.min(std::f64::consts::PI - d) <= max_angle
         })
-        .map(|s| (s, distance_to_segment(p, s)))
+        .map(|s| (s, s.distance_to(p)))
         .filter(|(_, d)| *d <= max_distance)
         .min_by(|a, b| a.1.total_cmp(&b.1))
         .map(|(s, _)| s)
-}
-
-/// Distance from `p` to the segment.
-fn distance_to_segment(p: &Point2<f64>, s: &MapSegment) -> f64 {
-    let d = s.end - s.start;
-    let t = ((p - s.start).dot(&d) / d.norm_squared()).clamp(0.0, 1.0);
-    (s.start + d * t - p).norm()
 }
 
 /// The middles and lengths of the pieces, at most `step` long, a wall is cut into.

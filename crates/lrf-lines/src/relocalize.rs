@@ -203,7 +203,7 @@ pub fn relocalize(
             .map(|l| l.a.coords.norm().max(l.b.coords.norm()))
             .fold(0.0, f64::max);
     let index = WallIndex::new(map, params.inlier_distance, |w| {
-        distance_to_segment(&window.center, w) <= reach
+        w.distance_to(&window.center) <= reach
     });
     // Pairs with the two longest lines: one of them may be clutter the map lacks.
     let anchors = 2;
@@ -402,13 +402,6 @@ impl WallIndex {
     fn near(&self, p: &Point2<f64>) -> &[usize] {
         self.cells.get(&cell(p)).map_or(&[], Vec::as_slice)
     }
-}
-
-/// Distance from `p` to the segment `w` (m).
-fn distance_to_segment(p: &Point2<f64>, w: &MapSegment) -> f64 {
-    let d = w.end - w.start;
-    let t = ((p - w.start).dot(&d) / d.norm_squared()).clamp(0.0, 1.0);
-    (w.start + d * t - p).norm()
 }
 
 fn cell(p: &Point2<f64>) -> (i64, i64) {

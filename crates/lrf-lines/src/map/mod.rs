@@ -49,6 +49,14 @@ impl MapSegment {
         (self.end - self.start).norm()
     }
 
+    /// Distance from `p` to the segment (m): to the nearest point `start + t (end − start)`,
+    /// `t = clamp((p − start)·(end − start) / |end − start|², 0, 1)`.
+    pub fn distance_to(&self, p: &Point2<f64>) -> f64 {
+        let d = self.end - self.start;
+        let t = ((p - self.start).dot(&d) / d.norm_squared()).clamp(0.0, 1.0);
+        (self.start + d * t - p).norm()
+    }
+
     /// The interval `[t_min, t_max]` the segment covers along the direction of `line`
     /// (see [`line_direction`]): `t = p · d` for both end points.
     pub fn extent_along(&self, line: &Line<f64>) -> (f64, f64) {
