@@ -25,6 +25,11 @@ cargo build -p ekf-core -p lrf-lines -p ekf-fusion --no-default-features --targe
 step "cargo doc"
 RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps
 
+# Every parser that takes outside bytes, fuzzed briefly (libFuzzer through cargo-fuzz, on
+# nightly, both installed by the script); scripts/fuzz.sh SECONDS runs them longer.
+step "fuzz targets, ${EKF_FUZZ_SECONDS:=15}s each (scripts/fuzz.sh)"
+scripts/fuzz.sh "$EKF_FUZZ_SECONDS"
+
 # ---------------------------------------------------------------------------------------
 # The real-log benchmark: every shared CARMEN log imported, mapped from its reference and
 # replayed laser-only with the defaults, from the first reference pose and with --global;

@@ -144,6 +144,44 @@ fn a_flipped_byte_in_a_chunk_stops_at_that_chunk() {
     }
 }
 
+/// The `mcap_bag` fuzz target's first find (fuzz/regressions/mcap_bag/): a chunk whose
+/// compression-name length says 2.9 GB made the `mcap` crate reserve that much before
+/// reading. The length is now checked against the record first, with the summary and
+/// without it (the recovery pass), and the chunk is reported as damage.
+#[test]
+fn a_chunk_header_length_that_overruns_its_record_is_damage_not_an_allocation() {
+    let dir = tempfile::tempdir().unwrap();
+    let full = dir.path().join("full.mcap");
+    let original = write_multi_chunk_bag(&full, SCANS);
+    let chunks = chunk_indexes(&full);
+    let chunk = &chunks[1];
+    let mut bytes = std::fs::read(&full).unwrap();
+    // Opcode and length (9 bytes), then start, end, uncompressed size and CRC (28 bytes).
+    let name_len = (chunk.chunk_start_offset + 9 + 28) as usize;
+    bytes[name_len..name_len + 4].copy_from_slice(&0xadf0_0000u32.to_le_bytes());
+    let before = original
+        .iter()
+        .filter(|(t, _)| *t < chunk.message_start_time)
+        .count();
+    for (name, keep) in [("indexed", bytes.len()), ("cut", bytes.len() - 100)] {
+        let path = dir.path().join(format!("{name}.mcap"));
+        std::fs::write(&path, &bytes[..keep]).unwrap();
+        let (delivered, err) = read_all_ok(&path);
+        let err = err.unwrap_or_else(|| panic!("{name}: not detected"));
+        assert_eq!(delivered[..], original[..before], "{name}: {err}");
+        assert_eq!(
+            corrupt_offset(&err),
+            chunk.chunk_start_offset,
+            "{name}: {err}"
+        );
+        assert!(
+            err.to_string()
+                .contains("record with opcode 06 length exceeds limit"),
+            "{name}: {err}"
+        );
+    }
+}
+
 #[test]
 fn a_flipped_byte_in_a_truncated_file_stops_at_that_chunk() {
     let dir = tempfile::tempdir().unwrap();

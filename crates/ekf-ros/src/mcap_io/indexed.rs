@@ -1,6 +1,7 @@
 //! Messages in log-time order through the chunk indexes, around the `mcap` crate's sans-io
 //! `IndexedReader`, with each chunk's CRC checked before any of its messages is delivered.
 
+use super::guard::check_record;
 use super::message::ChannelInfo;
 use super::source::{Raw, SourceError, MAX_RECORD_BYTES};
 use mcap::records::{op, ChunkIndex, Record};
@@ -115,6 +116,7 @@ impl IndexedSource {
         if self.buf[0] != op::CHUNK {
             return Err(corrupt(McapError::BadIndex));
         }
+        check_record(op::CHUNK, &self.buf[9..]).map_err(corrupt)?;
         let (header, data) = match mcap::parse_record(op::CHUNK, &self.buf[9..]) {
             Ok(Record::Chunk { header, data }) => (header, data),
             Ok(_) => return Err(corrupt(McapError::BadIndex)),
@@ -123,18 +125,18 @@ impl IndexedSource {
         if header.compressed_size != data.len() as u64 {
             return Err(corrupt(McapError::BadIndex));
         }
-        for_each_chunk_record(&self.buf, |_, _| Ok(())).map_err(corrupt)?;
+        for_each_chunk_record(&self.buf[9..], |_, _| Ok(())).map_err(corrupt)?;
         self.reader
             .insert_chunk_record_data(data_offset, &data)
             .map_err(corrupt)
     }
 }
 
-/// Decompresses the chunk record `record` (opcode and length included), checks its CRC
-/// before anything else, then calls `each(opcode, body)` for every record inside it. Uses
-/// the same size limit as the readers.
+/// Decompresses the chunk record whose body (without opcode and length) is `body`, checks
+/// its CRC before anything else, then calls `each(opcode, body)` for every record inside
+/// it. Uses the same size limit as the readers.
 pub(crate) fn for_each_chunk_record(
-    record: &[u8],
+    body: &[u8],
     mut each: impl FnMut(u8, &[u8]) -> Result<(), McapError>,
 ) -> Result<(), McapError> {
     let options = LinearReaderOptions::default()
@@ -143,14 +145,24 @@ pub(crate) fn for_each_chunk_record(
         .with_prevalidate_chunk_crcs(true)
         .with_record_length_limit(MAX_RECORD_BYTES);
     let mut reader = LinearReader::new_with_options(options);
-    let mut rest = record;
+    let mut prefix = [0u8; 9];
+    prefix[0] = op::CHUNK;
+    prefix[1..].copy_from_slice(&(body.len() as u64).to_le_bytes());
+    let mut pieces = [&prefix[..], body];
+    let mut current = 0;
     while let Some(event) = reader.next_event() {
         match event? {
             LinearReadEvent::ReadRequest(n) => {
+                while current < pieces.len() && pieces[current].is_empty() {
+                    current += 1;
+                }
+                let rest = pieces.get(current).copied().unwrap_or_default();
                 let (piece, tail) = rest.split_at(n.min(rest.len()));
                 reader.insert(piece.len()).copy_from_slice(piece);
                 reader.notify_read(piece.len());
-                rest = tail;
+                if let Some(p) = pieces.get_mut(current) {
+                    *p = tail;
+                }
             }
             LinearReadEvent::Record { opcode, data } => each(opcode, data)?,
         }

@@ -28,6 +28,7 @@
 //! ```
 
 mod error;
+mod guard;
 mod indexed;
 mod linear;
 mod mcap_file;

@@ -1,6 +1,7 @@
 //! Rebuilding the index of a bag whose summary is missing or damaged (a recording cut
 //! short): one pass over the file that checks every chunk and notes where it lies.
 
+use super::guard::check_record;
 use super::indexed::for_each_chunk_record;
 use super::source::{SourceError, MAX_RECORD_BYTES, READ_PIECE};
 use mcap::records::{op, ChunkIndex, Record, Statistics};
@@ -105,6 +106,7 @@ struct Index {
 impl Index {
     /// Notes a schema or channel; returns whether the record was a message.
     fn add_record(&mut self, opcode: u8, data: &[u8]) -> Result<bool, McapError> {
+        check_record(opcode, data)?;
         match mcap::parse_record(opcode, data)? {
             Record::Schema { header, data } => {
                 let schema = Schema {
@@ -137,6 +139,7 @@ impl Index {
     /// Checks the chunk record starting at `start` (body `body`), notes the schemas,
     /// channels and messages inside, and adds its index entry.
     fn add_chunk(&mut self, start: u64, body: &[u8]) -> Result<(), McapError> {
+        check_record(op::CHUNK, body)?;
         let Record::Chunk { header, data } = mcap::parse_record(op::CHUNK, body)? else {
             return Err(McapError::BadIndex);
         };
@@ -146,18 +149,14 @@ impl Index {
                 available: data.len() as u64,
             });
         }
-        let mut record = Vec::with_capacity(PREFIX as usize + body.len());
-        record.push(op::CHUNK);
-        record.extend_from_slice(&(body.len() as u64).to_le_bytes());
-        record.extend_from_slice(body);
-        for_each_chunk_record(&record, |opcode, data| {
+        for_each_chunk_record(body, |opcode, data| {
             self.add_record(opcode, data).map(|_| ())
         })?;
         self.chunks.push(ChunkIndex {
             message_start_time: header.message_start_time,
             message_end_time: header.message_end_time,
             chunk_start_offset: start,
-            chunk_length: record.len() as u64,
+            chunk_length: PREFIX + body.len() as u64,
             message_index_offsets: BTreeMap::new(),
             message_index_length: 0,
             compression: header.compression,

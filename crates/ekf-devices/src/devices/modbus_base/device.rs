@@ -110,7 +110,7 @@ impl BaseController {
 
 #[cfg(test)]
 mod tests {
-    use super::super::client::{BaseClient, BaseConfig, PollFault};
+    use super::super::{BaseClient, BaseConfig, PollFault};
     use super::*;
     use crate::devices::Link;
     use std::collections::VecDeque;

@@ -4,9 +4,11 @@
 
 pub mod client;
 pub mod device;
+pub mod reply;
 pub mod tracker;
 
 pub use client::{BaseClient, BaseConfig, BaseCounters, REQUEST_CHARACTERS};
+pub use reply::{PollFault, ReplyScanner};
 pub use tracker::{EncoderTracker, WheelTicks};
 
 /// First input register read: the block below is read in one request (function 04).
