@@ -3,10 +3,11 @@
 
 mod mcap_common;
 
-use ekf_cli::mcap_io::{BagReader, BagWriter, MessageOrder, ReadError};
+use ekf_cli::mcap_io::{BagReader, BagWriter, LostRange, MessageOrder, ReadError};
 use ekf_cli::ros2::sensor_msgs::LaserScan;
 use ekf_cli::ros2::RosMessage;
-use mcap_common::{read_all_ok, scan, write_multi_chunk_bag};
+use mcap::records::ChunkIndex;
+use mcap_common::{read_all, read_all_ok, scan, write_multi_chunk_bag};
 use std::path::Path;
 
 /// Number of 80 kB scans: about six 1 MiB chunks.
@@ -17,6 +18,24 @@ fn corrupt_offset(err: &ReadError) -> u64 {
         ReadError::Corrupt { offset, .. } => *offset,
         other => panic!("expected a Corrupt error, got {other}"),
     }
+}
+
+/// The chunk offset of a skipped damaged chunk, and the log times it reports lost.
+fn skipped(err: &ReadError) -> (u64, LostRange) {
+    match err {
+        ReadError::SkippedChunk { offset, lost, .. } => (*offset, *lost),
+        other => panic!("expected a SkippedChunk error, got {other}"),
+    }
+}
+
+/// The messages of `original` outside `chunk`'s time range.
+fn without(original: &[(u64, Vec<u8>)], chunk: &ChunkIndex) -> Vec<(u64, Vec<u8>)> {
+    let lost = chunk.message_start_time..=chunk.message_end_time;
+    original
+        .iter()
+        .filter(|(t, _)| !lost.contains(t))
+        .cloned()
+        .collect()
 }
 
 #[test]
@@ -106,7 +125,7 @@ fn chunk_indexes(path: &Path) -> Vec<mcap::records::ChunkIndex> {
 }
 
 #[test]
-fn a_flipped_byte_in_a_chunk_stops_at_that_chunk() {
+fn a_flipped_byte_in_a_chunk_loses_that_chunk_only() {
     let dir = tempfile::tempdir().unwrap();
     let full = dir.path().join("full.mcap");
     let original = write_multi_chunk_bag(&full, SCANS);
@@ -131,15 +150,24 @@ fn a_flipped_byte_in_a_chunk_stops_at_that_chunk() {
             let path = dir.path().join(format!("flip_{at}.mcap"));
             std::fs::write(&path, &damaged).unwrap();
 
-            let (delivered, err) = read_all_ok(&path);
-            let err = err.unwrap_or_else(|| panic!("flip at {at}: not detected"));
-            let before = original
-                .iter()
-                .filter(|(t, _)| *t < chunk.message_start_time)
-                .count();
-            assert_eq!(delivered.len(), before, "flip at {at} in chunk {k}: {err}");
-            assert_eq!(delivered[..], original[..before]);
-            assert_eq!(corrupt_offset(&err), chunk.chunk_start_offset, "{err}");
+            let (delivered, errors) = read_all(&path);
+            assert_eq!(errors.len(), 1, "flip at {at} in chunk {k}: {errors:?}");
+            assert_eq!(
+                delivered,
+                without(&original, chunk),
+                "flip at {at} in chunk {k}"
+            );
+            let (offset, lost) = skipped(&errors[0]);
+            assert_eq!(offset, chunk.chunk_start_offset, "{}", errors[0]);
+            assert_eq!(
+                (lost.from_ns, lost.to_ns),
+                (Some(chunk.message_start_time), Some(chunk.message_end_time))
+            );
+            let text = errors[0].to_string();
+            assert!(
+                text.contains(&format!("damaged chunk at byte {offset} skipped")),
+                "{text}"
+            );
         }
     }
 }
@@ -147,7 +175,7 @@ fn a_flipped_byte_in_a_chunk_stops_at_that_chunk() {
 /// The `mcap_bag` fuzz target's first find (fuzz/regressions/mcap_bag/): a chunk whose
 /// compression-name length says 2.9 GB made the `mcap` crate reserve that much before
 /// reading. The length is now checked against the record first, with the summary and
-/// without it (the recovery pass), and the chunk is reported as damage.
+/// without it (the recovery pass), and the chunk is skipped as damage.
 #[test]
 fn a_chunk_header_length_that_overruns_its_record_is_damage_not_an_allocation() {
     let dir = tempfile::tempdir().unwrap();
@@ -159,31 +187,29 @@ fn a_chunk_header_length_that_overruns_its_record_is_damage_not_an_allocation() 
     // Opcode and length (9 bytes), then start, end, uncompressed size and CRC (28 bytes).
     let name_len = (chunk.chunk_start_offset + 9 + 28) as usize;
     bytes[name_len..name_len + 4].copy_from_slice(&0xadf0_0000u32.to_le_bytes());
-    let before = original
-        .iter()
-        .filter(|(t, _)| *t < chunk.message_start_time)
-        .count();
-    for (name, keep) in [("indexed", bytes.len()), ("cut", bytes.len() - 100)] {
-        let path = dir.path().join(format!("{name}.mcap"));
-        std::fs::write(&path, &bytes[..keep]).unwrap();
-        let (delivered, err) = read_all_ok(&path);
-        let err = err.unwrap_or_else(|| panic!("{name}: not detected"));
-        assert_eq!(delivered[..], original[..before], "{name}: {err}");
-        assert_eq!(
-            corrupt_offset(&err),
-            chunk.chunk_start_offset,
-            "{name}: {err}"
-        );
-        assert!(
-            err.to_string()
-                .contains("record with opcode 06 length exceeds limit"),
-            "{name}: {err}"
-        );
-    }
+    let path = dir.path().join("indexed.mcap");
+    std::fs::write(&path, &bytes).unwrap();
+    let (delivered, errors) = read_all(&path);
+    assert_eq!(delivered, without(&original, chunk));
+    assert_eq!(errors.len(), 1, "{errors:?}");
+    assert_eq!(skipped(&errors[0]).0, chunk.chunk_start_offset);
+    let text = errors[0].to_string();
+    assert!(
+        text.contains("record with opcode 06 length exceeds limit"),
+        "{text}"
+    );
+    // Without the summary the recovery pass finds the same damage and reads on.
+    let path = dir.path().join("cut.mcap");
+    std::fs::write(&path, &bytes[..bytes.len() - 100]).unwrap();
+    let (delivered, errors) = read_all(&path);
+    assert_eq!(delivered, without(&original, chunk));
+    assert_eq!(errors.len(), 2, "{errors:?}");
+    assert_eq!(skipped(&errors[0]).0, chunk.chunk_start_offset);
+    assert!(corrupt_offset(&errors[1]) > chunks.last().unwrap().chunk_start_offset);
 }
 
 #[test]
-fn a_flipped_byte_in_a_truncated_file_stops_at_that_chunk() {
+fn a_flipped_byte_in_a_truncated_file_loses_that_chunk_and_the_cut_end() {
     let dir = tempfile::tempdir().unwrap();
     let full = dir.path().join("full.mcap");
     let original = write_multi_chunk_bag(&full, SCANS);
@@ -196,20 +222,22 @@ fn a_flipped_byte_in_a_truncated_file_stops_at_that_chunk() {
     let path = dir.path().join("flip_and_cut.mcap");
     std::fs::write(&path, &bytes).unwrap();
 
-    let (delivered, err) = read_all_ok(&path);
-    let err = err.expect("damage reported");
-    let before = original
-        .iter()
-        .filter(|(t, _)| *t < chunk.message_start_time)
-        .count();
-    assert_eq!(delivered[..], original[..before]);
-    let offset = corrupt_offset(&err);
+    let (delivered, errors) = read_all(&path);
+    // The damaged chunk, then the cut (inside the summary: no message lost there).
+    assert_eq!(errors.len(), 2, "{errors:?}");
+    assert_eq!(delivered, without(&original, chunk));
+    let (offset, lost) = skipped(&errors[0]);
     let chunk_end = chunk.chunk_start_offset + chunk.chunk_length;
     assert!(
         (chunk.chunk_start_offset..=chunk_end).contains(&offset),
-        "{offset} outside chunk {}..{chunk_end}: {err}",
-        chunk.chunk_start_offset
+        "{offset} outside chunk {}..{chunk_end}: {}",
+        chunk.chunk_start_offset,
+        errors[0]
     );
+    // Without an index, the lost times are bounded by the intact chunks around it.
+    assert_eq!(lost.from_ns, Some(chunks[0].message_end_time));
+    assert_eq!(lost.to_ns, Some(chunks[2].message_start_time));
+    assert!(corrupt_offset(&errors[1]) > chunks.last().unwrap().chunk_start_offset);
 }
 
 #[test]

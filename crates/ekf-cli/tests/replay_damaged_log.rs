@@ -1,6 +1,7 @@
 //! `ekf replay` on a truncated or corrupted bag: everything readable is processed, the
-//! outputs are finished, and the error names the file and the byte where reading broke,
-//! with a non-zero exit code.
+//! outputs are finished. A cut end is an error naming the file and the byte where
+//! reading broke, with a non-zero exit code; a damaged chunk with intact chunks after it
+//! is read past, and the lost log times are reported.
 
 mod replay_support;
 
@@ -172,8 +173,11 @@ fn a_truncated_log_is_processed_up_to_the_cut() {
     assert_eq!(previous_rows, full_tum.len());
 }
 
+/// A corrupted chunk in the middle (the bag's index intact) loses that chunk only: the
+/// replay reads on after it and exits 0, and the summary, the TUM file and the output
+/// bag each say which log times were lost.
 #[test]
-fn a_corrupted_chunk_stops_the_replay_at_that_chunk() {
+fn a_corrupted_chunk_is_read_past_and_the_lost_times_are_reported() {
     let dir = tempfile::tempdir().expect("tempdir");
     let full = chunked_log(dir.path());
     let full_tum = full_run(&full);
@@ -191,21 +195,107 @@ fn a_corrupted_chunk_stops_the_replay_at_that_chunk() {
         damaged[(data + chunk.compressed_size / 2) as usize] ^= 0x5A;
         let log = dir.path().join(format!("flip_chunk_{k}.mcap"));
         std::fs::write(&log, &damaged).expect("write damaged bag");
-        let d = replay_damaged(&log, &full_tum);
-        assert_eq!(
-            byte_offset(&d.stderr),
-            chunk.chunk_start_offset,
-            "{}",
-            d.stderr
-        );
-        // Every pose before the damaged chunk, none after.
-        let last = d.tum_rows.last().expect("rows").0.clone();
+        let (out, tum) = (log.with_extension("out.mcap"), log.with_extension("tum"));
+        let summary = replay_json(&log, &["--out", p(&out), "--tum", p(&tum)]);
+
+        let stretches = summary["damaged"].as_array().expect("damaged");
+        assert_eq!(stretches.len(), 1, "{summary:#}");
+        let d = &stretches[0];
+        assert_eq!(d["file"], p(&log));
+        assert_eq!(d["byte_offset"], chunk.chunk_start_offset);
+        assert_eq!(d["lost"]["from_ns"], chunk.message_start_time);
+        assert_eq!(d["lost"]["to_ns"], chunk.message_end_time);
+        assert!(d["reason"].as_str().expect("reason").contains("CRC"), "{d}");
+        assert!(summary["warnings"][0]["reason"]
+            .as_str()
+            .expect("warning")
+            .starts_with("damaged chunk read past"));
+
+        // Poses before the damaged chunk as in the full run, and poses after it to the end.
+        let rows = read_tum_rows(&tum);
         let first_lost = stamp_text(chunk.message_start_time);
+        let before = full_tum.iter().filter(|(t, _)| *t < first_lost).count();
+        assert_eq!(rows[..before], full_tum[..before], "chunk {k}");
+        let after_lost = stamp_text(chunk.message_end_time);
         assert!(
-            last < first_lost,
-            "pose at {last} after the damage at {first_lost}"
+            rows.iter().any(|(t, _)| *t > after_lost),
+            "chunk {k}: nothing after"
         );
-        let expected = full_tum.iter().filter(|(t, _)| *t < first_lost).count();
-        assert_eq!(d.tum_rows.len(), expected);
+        assert_eq!(rows.last().map(|r| &r.0), full_tum.last().map(|r| &r.0));
+        let text = std::fs::read_to_string(&tum).expect("tum");
+        let comment = format!(
+            "# damaged log: {} at byte {}",
+            p(&log),
+            chunk.chunk_start_offset
+        );
+        assert!(
+            text.contains(&comment),
+            "no comment {comment:?} in the TUM file"
+        );
+
+        // The output bag carries the same report as a diagnostics message.
+        let out_bag = BagReader::open(&out).expect("output bag");
+        let reported = out_bag
+            .messages()
+            .expect("stream")
+            .map(|m| m.expect("output bag intact"))
+            .filter(|m| m.topic() == "/ekf/diagnostics")
+            .filter_map(|m| match m.decode() {
+                Ok(ekf_cli::ros2::AnyMessage::DiagnosticArray(a)) => Some(a),
+                _ => None,
+            })
+            .flat_map(|a| a.status)
+            .filter(|s| s.name == "ekf/log")
+            .count();
+        assert_eq!(reported, 1, "chunk {k}");
     }
+}
+
+/// One scan whose CDR is cut short (it cannot be decoded) is skipped with a warning that
+/// names the topic; the replay goes on and uses every other scan.
+#[test]
+fn an_undecodable_message_is_skipped_and_counted() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let s = Scenario {
+        loops: 1,
+        max_steps: Some(60),
+        ..Scenario::default()
+    };
+    let (full, _) = write_scenario(dir.path(), "full.mcap", &s);
+    let full_summary = replay_json(&full, &[]);
+    let bytes = std::fs::read(&full).expect("read bag");
+    let bad = dir.path().join("bad_scan.mcap");
+    let mut writer = mcap::Writer::new(std::io::BufWriter::new(
+        std::fs::File::create(&bad).expect("create"),
+    ))
+    .expect("writer");
+    let mut scans = 0;
+    let mut cut_at = 0;
+    for message in mcap::MessageStream::new(&bytes).expect("stream") {
+        let mut message = message.expect("message");
+        if message.channel.topic == "/scan" {
+            scans += 1;
+            if scans == 5 {
+                message.data = std::borrow::Cow::Owned(message.data[..10].to_vec());
+                cut_at = message.log_time;
+            }
+        }
+        writer.write(&message).expect("write");
+    }
+    writer.finish().expect("finish");
+
+    let summary = replay_json(&bad, &[]);
+    assert_eq!(summary["undecodable"], 1, "{summary:#}");
+    let warning = &summary["warnings"][0];
+    assert_eq!(warning["topic"], "/scan");
+    assert_eq!(warning["log_time_ns"], cut_at);
+    assert!(
+        warning["reason"]
+            .as_str()
+            .expect("reason")
+            .starts_with("skipped: "),
+        "{warning}"
+    );
+    let used = |s: &Value| s["lines"]["scans_used"].as_u64().expect("scans_used");
+    assert_eq!(used(&summary) + 1, used(&full_summary));
 }

@@ -53,15 +53,23 @@ pub fn write_multi_chunk_bag(path: &Path, count: u64) -> Vec<(u64, Vec<u8>)> {
 }
 
 /// Reads every message of `path`: the `(log_time, payload)` of those delivered, and the
-/// error that ended the stream, if any.
+/// last error (the one that ended the stream, or the last damage read past), if any.
 pub fn read_all_ok(path: &Path) -> (Vec<(u64, Vec<u8>)>, Option<ekf_cli::mcap_io::ReadError>) {
+    let (out, mut errors) = read_all(path);
+    (out, errors.pop())
+}
+
+/// Reads every message of `path`: the `(log_time, payload)` of those delivered, and every
+/// error in the order met (damage read past, then the one that ended the stream).
+pub fn read_all(path: &Path) -> (Vec<(u64, Vec<u8>)>, Vec<ekf_cli::mcap_io::ReadError>) {
     let bag = BagReader::open(path).unwrap();
     let mut out = Vec::new();
+    let mut errors = Vec::new();
     for message in bag.messages().unwrap() {
         match message {
             Ok(m) => out.push((m.log_time, m.data)),
-            Err(e) => return (out, Some(e)),
+            Err(e) => errors.push(e),
         }
     }
-    (out, None)
+    (out, errors)
 }

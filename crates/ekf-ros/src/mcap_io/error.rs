@@ -1,6 +1,7 @@
 //! Errors of bag reading, writing and typed decoding; each says which file, where in it
 //! (byte offset or message index), which topic and what was expected.
 
+pub use super::source::LostRange;
 use crate::ros2::DecodeError;
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -81,6 +82,24 @@ pub enum ReadError {
         #[source]
         source: Arc<mcap::McapError>,
     },
+    /// A damaged chunk was skipped: its messages are lost, and reading goes on with the
+    /// next intact chunk. The only error after which a bag's message stream continues
+    /// ([`ReadError::is_skipped_damage`]).
+    #[error(
+        "{path}: damaged chunk at byte {offset} skipped, reading on after it ({lost}): {source}",
+        path = path.display()
+    )]
+    SkippedChunk {
+        /// The bag.
+        path: PathBuf,
+        /// Where the chunk starts.
+        offset: u64,
+        /// The log times its messages had.
+        lost: LostRange,
+        /// What the MCAP parser found.
+        #[source]
+        source: Arc<mcap::McapError>,
+    },
     /// A message refers to a channel or schema the file never defined.
     #[error(
         "{path}: message {index} refers to channel {channel_id}, which the file does not define",
@@ -94,6 +113,14 @@ pub enum ReadError {
         /// The undefined channel id.
         channel_id: u16,
     },
+}
+
+impl ReadError {
+    /// Whether the stream goes on after this error (a skipped damaged chunk); after any
+    /// other error it ends.
+    pub fn is_skipped_damage(&self) -> bool {
+        matches!(self, ReadError::SkippedChunk { .. })
+    }
 }
 
 /// Why a message could not be decoded into the type asked for.

@@ -3,7 +3,7 @@
 
 use super::guard::check_record;
 use super::message::ChannelInfo;
-use super::source::{Raw, SourceError, MAX_RECORD_BYTES};
+use super::source::{LostRange, Raw, SourceError, MAX_RECORD_BYTES};
 use mcap::records::{op, ChunkIndex, Record};
 use mcap::sans_io::indexed_reader::ReadOrder;
 use mcap::sans_io::{
@@ -17,12 +17,20 @@ use std::io::{Read, Seek, SeekFrom};
 use std::sync::Arc;
 
 /// Messages in log-time order (ties in file order) from a file with chunk indexes. Each
-/// chunk's CRC is checked before any of its messages is delivered. Memory: the chunks whose
-/// time ranges overlap the current message, one chunk in the usual case.
+/// chunk's CRC is checked before any of its messages is delivered; a damaged chunk is
+/// reported ([`SourceError::Skipped`]) and passed over, and reading goes on with the next.
+/// Memory: the chunks whose time ranges overlap the current message, one chunk in the
+/// usual case.
 pub(crate) struct IndexedSource {
     file: File,
     file_len: u64,
     reader: IndexedReader,
+    /// The summary with the damaged chunks left out, to restart the reader from.
+    summary: Summary,
+    /// Log time of the last message delivered, and how many had that time.
+    last: Option<(u64, u64)>,
+    /// Messages at the last log time to pass over after a restart (delivered before it).
+    redelivered: u64,
     channels: HashMap<u16, Arc<ChannelInfo>>,
     /// Chunk records by the offset of their compressed data (what the reader asks for).
     chunks: HashMap<u64, ChunkIndex>,
@@ -39,10 +47,7 @@ impl IndexedSource {
         summary: &Summary,
         channels: HashMap<u16, Arc<ChannelInfo>>,
     ) -> Result<Self, SourceError> {
-        let mut options = IndexedReaderOptions::new().with_order(ReadOrder::LogTime);
-        options.record_length_limit = Some(MAX_RECORD_BYTES);
-        let reader = IndexedReader::new_with_options(summary, options)
-            .map_err(|e| SourceError::mcap(0, e))?;
+        let reader = reader_from(summary, None).map_err(|e| SourceError::mcap(0, e))?;
         let mut chunks = HashMap::new();
         for c in &summary.chunk_indexes {
             let at = c
@@ -54,6 +59,9 @@ impl IndexedSource {
             file,
             file_len,
             reader,
+            summary: summary.clone(),
+            last: None,
+            redelivered: 0,
             channels,
             chunks,
             buf: Vec::new(),
@@ -73,11 +81,23 @@ impl IndexedSource {
             };
             match event {
                 IndexedReadEvent::ReadChunkRequest { offset, .. } => {
-                    if let Err(e) = self.load_chunk(offset) {
-                        return Some(Err(e));
+                    match self.load_chunk(offset) {
+                        Ok(()) => {}
+                        Err(SourceError::Mcap { offset: at, source }) => {
+                            return Some(Err(self.skip_chunk(offset, at, source)));
+                        }
+                        Err(e) => return Some(Err(e)),
                     }
                 }
                 IndexedReadEvent::Message { header, data } => {
+                    let t = header.log_time;
+                    let same_time = self.last.filter(|(last, _)| *last == t);
+                    if self.redelivered > 0 && same_time.is_some() {
+                        self.redelivered -= 1;
+                        continue;
+                    }
+                    self.redelivered = 0;
+                    self.last = Some((t, same_time.map_or(1, |(_, n)| n + 1)));
                     let Some(channel) = self.channels.get(&header.channel_id) else {
                         return Some(Err(SourceError::UnknownChannel(header.channel_id)));
                     };
@@ -89,6 +109,34 @@ impl IndexedSource {
                     }));
                 }
             }
+        }
+    }
+
+    /// Leaves the damaged chunk whose data starts at `data_offset` out of the summary and
+    /// restarts the reader at the last log time delivered (passing over the messages at
+    /// that time already delivered). Returns the report of the skip, or the error that
+    /// ends the stream if the reader cannot restart.
+    fn skip_chunk(&mut self, data_offset: u64, at: u64, source: Arc<McapError>) -> SourceError {
+        let Some(index) = self.chunks.get(&data_offset) else {
+            return SourceError::Mcap { offset: at, source };
+        };
+        let lost = LostRange {
+            from_ns: Some(index.message_start_time),
+            to_ns: Some(index.message_end_time),
+        };
+        let start = index.chunk_start_offset;
+        self.summary
+            .chunk_indexes
+            .retain(|c| c.chunk_start_offset != start);
+        match reader_from(&self.summary, self.last.map(|(t, _)| t)) {
+            Ok(reader) => self.reader = reader,
+            Err(e) => return SourceError::mcap(start, e),
+        }
+        self.redelivered = self.last.map_or(0, |(_, n)| n);
+        SourceError::Skipped {
+            offset: at,
+            lost,
+            source,
         }
     }
 
@@ -130,6 +178,16 @@ impl IndexedSource {
             .insert_chunk_record_data(data_offset, &data)
             .map_err(corrupt)
     }
+}
+
+/// An indexed reader over `summary`'s chunks in log-time order, from log time `from_ns`.
+fn reader_from(summary: &Summary, from_ns: Option<u64>) -> Result<IndexedReader, McapError> {
+    let mut options = IndexedReaderOptions::new().with_order(ReadOrder::LogTime);
+    if let Some(t) = from_ns {
+        options = options.starting_at(t);
+    }
+    options.record_length_limit = Some(MAX_RECORD_BYTES);
+    IndexedReader::new_with_options(summary, options)
 }
 
 /// Decompresses the chunk record whose body (without opcode and length) is `body`, checks

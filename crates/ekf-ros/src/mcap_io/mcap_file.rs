@@ -8,7 +8,7 @@ use super::recover::recover;
 use super::source::{Raw, SourceError};
 use super::summary;
 use mcap::Summary;
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, VecDeque};
 use std::fs::File;
 use std::path::Path;
 use std::sync::Arc;
@@ -23,6 +23,8 @@ pub(crate) struct McapFile {
     file_len: u64,
     /// The file's summary, or one rebuilt by reading the file; `None` for unchunked files.
     summary: Option<Summary>,
+    /// Damage rebuilding the summary read past; reported before the first message.
+    skipped: Vec<SourceError>,
     /// Where rebuilding the summary stopped early; reported after the last message.
     damage: Option<SourceError>,
     counts: TopicCounts,
@@ -45,17 +47,25 @@ impl McapFile {
         let file_len = file.metadata().map_err(open_error)?.len();
         let found =
             summary::read_summary(&mut file, file_len).filter(|s| !s.chunk_indexes.is_empty());
-        let (summary, damage, unchunked) = match found {
-            Some(summary) => (summary, None, false),
+        let (summary, skipped, damage, unchunked) = match found {
+            Some(summary) => (summary, Vec::new(), None, false),
             None => {
                 let r = recover(&mut file);
                 // Damage and no channel at all: nothing of the file is readable (it is
                 // not an MCAP file, or was cut before its first chunk ended), so it does
                 // not open.
-                if let (Some(damage), true) = (&r.damage, r.summary.channels.is_empty()) {
-                    return Err(to_read_error(&path, 0, damage.clone()));
+                let first_damage = r.skipped.first().or(r.damage.as_ref());
+                if let (Some(damage), true) = (first_damage, r.summary.channels.is_empty()) {
+                    let damage = match damage {
+                        SourceError::Skipped { offset, source, .. } => SourceError::Mcap {
+                            offset: *offset,
+                            source: Arc::clone(source),
+                        },
+                        other => other.clone(),
+                    };
+                    return Err(to_read_error(&path, 0, damage));
                 }
-                (r.summary, r.damage, r.unchunked)
+                (r.summary, r.skipped, r.damage, r.unchunked)
             }
         };
         // A rebuilt summary always has statistics; a file's own may lack them.
@@ -65,6 +75,7 @@ impl McapFile {
             file_len,
             // Unchunked files stream front to back, which finds any damage by itself.
             summary: (!unchunked).then_some(summary),
+            skipped: if unchunked { Vec::new() } else { skipped },
             damage: damage.filter(|_| !unchunked),
             counts: TopicCounts::new(),
         };
@@ -106,6 +117,7 @@ impl McapFile {
         Ok(McapMessages {
             path: Arc::clone(&self.path),
             source,
+            skipped: self.skipped.iter().cloned().collect(),
             damage: self.damage.clone(),
             delivered: 0,
             done: false,
@@ -153,6 +165,16 @@ fn summary_counts(summary: &Summary) -> TopicCounts {
 fn to_read_error(path: &Path, delivered: u64, e: SourceError) -> ReadError {
     let path = path.to_path_buf();
     match e {
+        SourceError::Skipped {
+            offset,
+            lost,
+            source,
+        } => ReadError::SkippedChunk {
+            path,
+            offset,
+            lost,
+            source,
+        },
         SourceError::Mcap { offset, source } => ReadError::Corrupt {
             path,
             offset,
@@ -184,6 +206,8 @@ enum Source {
 pub(crate) struct McapMessages {
     path: Arc<Path>,
     source: Source,
+    /// Damage read past when the file was opened, yielded before the first message.
+    skipped: VecDeque<SourceError>,
     /// Damage found when the file was opened, yielded after the last message.
     damage: Option<SourceError>,
     delivered: u64,
@@ -197,6 +221,9 @@ impl Iterator for McapMessages {
         if self.done {
             return None;
         }
+        if let Some(skipped) = self.skipped.pop_front() {
+            return Some(Err(to_read_error(&self.path, self.delivered, skipped)));
+        }
         let next = match &mut self.source {
             Source::Indexed(s) => s.next(),
             Source::Linear(s) => s.next(),
@@ -208,7 +235,7 @@ impl Iterator for McapMessages {
                 Some(Err(to_read_error(&self.path, self.delivered, damage)))
             }
             Some(Err(e)) => {
-                self.done = true;
+                self.done = !matches!(e, SourceError::Skipped { .. });
                 Some(Err(to_read_error(&self.path, self.delivered, e)))
             }
             Some(Ok(raw)) => {

@@ -36,13 +36,14 @@ mod message;
 pub mod metadata;
 pub mod reader;
 mod recover;
+mod resync;
 pub mod sniff;
 mod source;
 mod sqlite;
 mod summary;
 pub mod writer;
 
-pub use error::{MessageError, ReadError, WriteError};
+pub use error::{LostRange, MessageError, ReadError, WriteError};
 pub use message::{BagMessage, ChannelInfo, TopicInfo};
 pub use reader::{BagReader, MessageOrder, Messages};
 pub use writer::BagWriter;

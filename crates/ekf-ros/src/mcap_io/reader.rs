@@ -163,7 +163,9 @@ impl Iterator for PartMessages {
 }
 
 /// The messages of a bag: the files' streams merged by log time. Yields every message up
-/// to the end or the first damage; after an error it yields nothing more.
+/// to the end or the first damage that cannot be read past. A damaged chunk is reported
+/// where it was met ([`ReadError::SkippedChunk`]) and reading goes on after it; after
+/// any other error the stream yields nothing more.
 pub struct Messages {
     /// Each file's stream, with the log time of the last message it delivered (where its
     /// error, if it has one, is placed in the merged order).
@@ -192,7 +194,7 @@ impl Iterator for Messages {
         let (stream, last) = &mut self.streams[index];
         match stream.next()? {
             Err(e) => {
-                self.done = true;
+                self.done = !e.is_skipped_damage();
                 Some(Err(e))
             }
             Ok(Raw {

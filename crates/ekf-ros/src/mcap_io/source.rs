@@ -25,10 +25,44 @@ pub(crate) struct Raw {
     pub data: Vec<u8>,
 }
 
-/// Why a source stopped, with the byte offset it had reached. Cloneable, so the damage a
-/// recovery pass found can be reported by every stream over the file.
+/// Log times (ns) between which a skipped stretch of a file had its messages: either end
+/// unknown when no intact chunk is on that side.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
+pub struct LostRange {
+    /// The last log time known to be before the lost messages.
+    pub from_ns: Option<u64>,
+    /// The first log time known to be after them.
+    pub to_ns: Option<u64>,
+}
+
+impl std::fmt::Display for LostRange {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let s = |t: u64| t as f64 * 1e-9;
+        match (self.from_ns, self.to_ns) {
+            (Some(a), Some(b)) => write!(
+                f,
+                "messages logged from {:.3} s to {:.3} s lost",
+                s(a),
+                s(b)
+            ),
+            (Some(a), None) => write!(f, "messages logged after {:.3} s lost", s(a)),
+            (None, Some(b)) => write!(f, "messages logged before {:.3} s lost", s(b)),
+            (None, None) => write!(f, "log times of the lost messages unknown"),
+        }
+    }
+}
+
+/// Why a source stopped, or what it skipped, with the byte offset it had reached.
+/// Cloneable, so the damage a recovery pass found can be reported by every stream over
+/// the file.
 #[derive(Debug, Clone)]
 pub(crate) enum SourceError {
+    /// A damaged chunk was passed over; the source goes on after it.
+    Skipped {
+        offset: u64,
+        lost: LostRange,
+        source: Arc<McapError>,
+    },
     /// The parser rejected the data at `offset`.
     Mcap { offset: u64, source: Arc<McapError> },
     /// Reading at `offset` failed.

@@ -234,10 +234,17 @@ pub fn replay(
     for message in bag.messages()? {
         let message = match message {
             Ok(m) => m,
-            Err(e) => {
-                read_failure = Some(e.into());
-                break;
-            }
+            Err(e) => match run.read_past(&e) {
+                Ok(true) => continue,
+                Ok(false) => {
+                    read_failure = Some(e.into());
+                    break;
+                }
+                Err(write_failed) => {
+                    failure = Some(write_failed);
+                    break;
+                }
+            },
         };
         if let Err(e) = run.handle(&message) {
             failure = Some(e);
@@ -306,7 +313,8 @@ pub fn read_preamble(
     };
     let has_scan = bag.topics().iter().any(|i| i.topic == t.scan);
     for message in bag.messages()? {
-        let Ok(message) = message else { break };
+        // Damage read past is reported by the replay itself; the stream ends at any other.
+        let Ok(message) = message else { continue };
         let topic = message.topic();
         if p.scan_frame.is_none() && topic == t.tf_static {
             if let Ok(AnyMessage::TFMessage(tf)) = message.decode() {

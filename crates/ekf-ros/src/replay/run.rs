@@ -10,7 +10,8 @@ use super::summary::{self, ReplaySummary};
 use super::{laser_mount, load_map, reference_pose, sink, stamps};
 use super::{Preamble, ReplayError, ReplayOptions, ReplayOutcome};
 use crate::config::Config;
-use crate::mcap_io::{BagMessage, ChannelInfo};
+use crate::mcap_io::{BagMessage, ChannelInfo, ReadError};
+use crate::ros2::diagnostic_msgs::DiagnosticStatus;
 use crate::ros2::sensor_msgs::JointState;
 use crate::ros2::AnyMessage;
 use crate::trajectory::StampedPose;
@@ -277,6 +278,44 @@ impl<'a> Run<'a> {
         })
     }
 
+    /// Damage the reader read past: a warning, an entry in the summary's `damaged` list,
+    /// a diagnostics message in the output bag and a comment in the TUM file, each
+    /// saying which log times were lost. `false` if `e` is not such damage (it ends the
+    /// log).
+    pub fn read_past(&mut self, e: &ReadError) -> Result<bool, ReplayError> {
+        let Some(stretch) = summary::DamagedStretch::of(e) else {
+            return Ok(false);
+        };
+        let t_ns = stretch.lost.from_ns.unwrap_or(0);
+        self.summary
+            .warn(&stretch.file, t_ns, format!("damaged chunk read past: {e}"));
+        let text = format!(
+            "{} at byte {} read past ({}): {}",
+            stretch.file, stretch.byte_offset, stretch.lost, stretch.reason
+        );
+        self.poses.comment(&format!("damaged log: {text}"))?;
+        if let Some(out) = &mut self.out {
+            let secs =
+                |t: Option<u64>| t.map_or_else(String::new, |t| format!("{:.9}", t as f64 * 1e-9));
+            let values = vec![
+                ("file", stretch.file.clone()),
+                ("byte_offset", stretch.byte_offset.to_string()),
+                ("lost_from_s", secs(stretch.lost.from_ns)),
+                ("lost_to_s", secs(stretch.lost.to_ns)),
+                ("reason", stretch.reason.clone()),
+            ];
+            out.diagnostics(
+                t_ns,
+                "ekf/log",
+                DiagnosticStatus::WARN,
+                &format!("damaged log: {text}"),
+                values,
+            )?;
+        }
+        self.summary.damaged.push(stretch);
+        Ok(true)
+    }
+
     /// One message as it is read: decoded if it is an input, turned into one and pushed,
     /// then every input whose turn has come is fused, each at its stamp
     /// ([`TimedLocalizer`]).
@@ -296,7 +335,14 @@ impl<'a> Run<'a> {
                 );
                 return Ok(());
             }
-            Err(e) => return Err(e.into()),
+            // One undecodable message is skipped, not the end of the log.
+            Err(e) => {
+                self.count(message.topic());
+                self.summary.undecodable += 1;
+                self.summary
+                    .warn(message.topic(), message.log_time, format!("skipped: {e}"));
+                return Ok(());
+            }
         };
         let stamp = stamps::stamp_of(message);
         self.handle_decoded(&message.channel, message.log_time, stamp, decoded)

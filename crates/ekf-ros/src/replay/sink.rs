@@ -83,6 +83,15 @@ impl PoseSink {
         }
     }
 
+    /// A `#` comment line in the TUM file (TUM readers, evo's among them, skip them),
+    /// after the rows written so far.
+    pub fn comment(&mut self, text: &str) -> Result<(), ReplayError> {
+        if let Some((path, file)) = &mut self.tum {
+            writeln!(file, "# {}", text.replace('\n', " ")).map_err(tum_error(path))?;
+        }
+        Ok(())
+    }
+
     /// A reference pose.
     pub fn reference(&mut self, sample: StampedPose) {
         self.accuracy.reference(sample);

@@ -169,6 +169,44 @@ pub struct ReplaySummary {
     /// What about the log or the configuration a user may want to act on, e.g. a
     /// reference trajectory under another topic name.
     pub notes: Vec<String>,
+    /// Damaged stretches of the log that were read past, in the order met: their
+    /// messages are lost, the replay went on after each.
+    pub damaged: Vec<DamagedStretch>,
+    /// Input messages whose CDR could not be decoded, skipped (each also a warning).
+    pub undecodable: u64,
+}
+
+/// A damaged stretch of a log that the replay read past.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct DamagedStretch {
+    /// The storage file.
+    pub file: String,
+    /// Where the damaged chunk starts (byte offset).
+    pub byte_offset: u64,
+    /// The log times whose messages were lost.
+    pub lost: crate::mcap_io::LostRange,
+    /// What the MCAP reader found.
+    pub reason: String,
+}
+
+impl DamagedStretch {
+    /// The stretch a read error reports, if it is damage that was read past.
+    pub fn of(e: &crate::mcap_io::ReadError) -> Option<Self> {
+        match e {
+            crate::mcap_io::ReadError::SkippedChunk {
+                path,
+                offset,
+                lost,
+                source,
+            } => Some(Self {
+                file: path.display().to_string(),
+                byte_offset: *offset,
+                lost: *lost,
+                reason: source.to_string(),
+            }),
+            _ => None,
+        }
+    }
 }
 
 /// Most warnings kept verbatim in the summary.
@@ -277,6 +315,13 @@ impl fmt::Display for ReplaySummary {
                 "  line innovations: NIS per dof {nis:.2}; over-confident on {} of {} scans ({} \
                  stretches)",
                 c.over_confident_scans, c.scans, c.over_confident_stretches
+            )?;
+        }
+        for d in &self.damaged {
+            writeln!(
+                f,
+                "  damaged: {} at byte {} read past ({}): {}",
+                d.file, d.byte_offset, d.lost, d.reason
             )?;
         }
         for note in &self.notes {
