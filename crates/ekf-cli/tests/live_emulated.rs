@@ -13,7 +13,7 @@ use live_support::{assert_replay_gives_the_same_poses, ekf};
 use std::f64::consts::{FRAC_PI_2, TAU};
 use std::path::Path;
 use std::path::PathBuf;
-use std::process::{Command, Stdio};
+use std::process::Command;
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
 const ROOM: (f64, f64) = (8.0, 6.0);
@@ -106,7 +106,7 @@ fn start_emulators(dir: &Path, unit: RangeUnit) -> Emulators {
 }
 
 /// Sends `ekf live` `signal` (`kill`'s spelling, e.g. `-TERM`) and waits for it to end.
-fn stop(mut live: std::process::Child, signal: &str) -> std::process::Output {
+fn stop(mut live: std::process::Child, signal: &str) -> std::process::ExitStatus {
     let status = Command::new("kill")
         .args([signal, &live.id().to_string()])
         .status()
@@ -120,7 +120,7 @@ fn stop(mut live: std::process::Child, signal: &str) -> std::process::Output {
         );
         std::thread::sleep(Duration::from_millis(50));
     }
-    live.wait_with_output().unwrap()
+    live.wait().unwrap()
 }
 
 #[test]
@@ -228,6 +228,8 @@ fn a_silent_laser_is_a_timeout_naming_the_port() {
 struct LiveRun {
     _dir: tempfile::TempDir,
     recording: PathBuf,
+    /// When the signal was sent (ns since the epoch, the recording's clock).
+    stopped_ns: u64,
     stdout: String,
     stderr: String,
 }
@@ -258,16 +260,34 @@ fn run_live(unit: RangeUnit, steps: u32, step: impl FnMut(u32, &Emulators)) -> L
     run_live_until(unit, steps, "-TERM", step)
 }
 
-/// As [`run_live`], ending `ekf live` with `signal` (`kill`'s spelling, e.g. `-INT`).
+/// As [`run_live`], ending `ekf live` with `signal` (`kill`'s spelling, e.g. `-INT`),
+/// after which it must exit 0.
 fn run_live_until(
     unit: RangeUnit,
     steps: u32,
     signal: &str,
-    mut step: impl FnMut(u32, &Emulators),
+    step: impl FnMut(u32, &Emulators),
 ) -> LiveRun {
+    let (run, status) = drive_live(unit, steps, signal, step);
+    assert!(status.success(), "stderr: {}", run.stderr);
+    run
+}
+
+/// Starts `ekf live --record` on emulators whose laser sends `unit`, calls `step(k,
+/// emulators)` for k = 0..steps at 10 Hz (real time) once the devices are up, then sends
+/// `signal`. Returns the run and how `ekf live` exited.
+fn drive_live(
+    unit: RangeUnit,
+    steps: u32,
+    signal: &str,
+    mut step: impl FnMut(u32, &Emulators),
+) -> (LiveRun, std::process::ExitStatus) {
     let dir = tempfile::tempdir().unwrap();
     let emulators = start_emulators(dir.path(), unit);
     let recording = dir.path().join("run.mcap");
+    // Into files, not pipes: a pipe nobody reads fills up (64 kB, about 25 s of poses)
+    // and then blocks `ekf live`.
+    let (out_path, err_path) = (dir.path().join("stdout"), dir.path().join("stderr"));
     let mut live = ekf()
         .args(["live", "--json", "--laser"])
         .arg(emulators.path(Device::Laser))
@@ -275,8 +295,8 @@ fn run_live_until(
         .arg(emulators.path(Device::Base))
         .arg("--record")
         .arg(&recording)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
+        .stdout(std::fs::File::create(&out_path).unwrap())
+        .stderr(std::fs::File::create(&err_path).unwrap())
         .spawn()
         .unwrap();
     // The devices come up on samples: hold the first one until both are.
@@ -296,16 +316,17 @@ fn run_live_until(
         let due = started + Duration::from_millis(100 * u64::from(k + 1));
         std::thread::sleep(due.saturating_duration_since(Instant::now()));
     }
-    let output = stop(live, signal);
+    let stopped_ns = epoch_ns();
+    let status = stop(live, signal);
     emulators.stop();
     let run = LiveRun {
-        _dir: dir,
         recording,
-        stdout: String::from_utf8_lossy(&output.stdout).into_owned(),
-        stderr: String::from_utf8_lossy(&output.stderr).into_owned(),
+        stopped_ns,
+        stdout: std::fs::read_to_string(&out_path).unwrap(),
+        stderr: std::fs::read_to_string(&err_path).unwrap(),
+        _dir: dir,
     };
-    assert!(output.status.success(), "stderr: {}", run.stderr);
-    run
+    (run, status)
 }
 
 fn epoch_ns() -> u64 {
@@ -500,4 +521,73 @@ fn a_scanner_in_centimetres_keeps_its_long_ranges() {
         );
         assert!(scan.ranges.iter().all(|r| (r - 9.5).abs() < 1e-4));
     }
+}
+
+/// `kill -9` of `ekf live --record` after `seconds` of driving: the recording, which then
+/// has no summary, opens, holds every message up to at most 2 s before the kill (its
+/// chunks are closed and synced every second), and replays to the same point.
+fn a_hard_kill_loses_at_most_the_last_two_seconds(seconds: u32) {
+    let mut robot = Robot::new();
+    let (run, status) = drive_live(RangeUnit::Millimetres, seconds * 10, "-KILL", |k, e| {
+        if k > 0 {
+            robot.step(0.1);
+        }
+        e.sample(robot.sample(k % 2 == 0));
+    });
+    assert!(!status.success(), "ekf live survived kill -9");
+    let mut last_ns = 0;
+    let mut joint_states = 0;
+    for m in BagReader::open(&run.recording)
+        .expect("a killed recording opens")
+        .messages()
+        .unwrap()
+    {
+        // The cut end is reported after the last intact message.
+        let Ok(m) = m else { continue };
+        last_ns = last_ns.max(m.log_time);
+        joint_states += u64::from(m.topic() == "/joint_states");
+    }
+    let lost_s = (run.stopped_ns.saturating_sub(last_ns)) as f64 * 1e-9;
+    eprintln!("kill -9 after {seconds} s: {joint_states} wheel readings kept, last {lost_s:.2} s before the kill lost");
+    assert!(
+        lost_s <= 2.0,
+        "the last {lost_s:.2} s before the kill are lost"
+    );
+    assert!(
+        joint_states >= u64::from(seconds) * 8,
+        "{joint_states} wheel readings"
+    );
+
+    // The replay reads it to its last intact chunk, then names the cut (exit 1).
+    let tum = run.recording.with_extension("tum");
+    let replay = ekf()
+        .args(["replay", "--json", "--tum"])
+        .arg(&tum)
+        .arg(&run.recording)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&replay.stderr);
+    assert!(stderr.contains("truncated or corrupt MCAP"), "{stderr}");
+    let text = std::fs::read_to_string(&tum).unwrap();
+    let last_row_ns = text
+        .lines()
+        .filter(|l| !l.starts_with('#'))
+        .filter_map(|l| l.split_whitespace().next()?.parse::<f64>().ok())
+        .fold(0.0, f64::max)
+        * 1e9;
+    let replay_lost_s = (run.stopped_ns as f64 - last_row_ns) * 1e-9;
+    assert!(
+        replay_lost_s <= 2.0,
+        "the replay ends {replay_lost_s:.2} s before the kill"
+    );
+}
+
+#[test]
+fn a_hard_kill_after_15_s_loses_at_most_the_last_two_seconds() {
+    a_hard_kill_loses_at_most_the_last_two_seconds(15);
+}
+
+#[test]
+fn a_hard_kill_after_70_s_loses_at_most_the_last_two_seconds() {
+    a_hard_kill_loses_at_most_the_last_two_seconds(70);
 }

@@ -379,3 +379,21 @@ fn a_wrong_end_magic_is_reported_where_it_starts_after_every_message() {
     let err = err.expect("the damage is reported after the messages");
     assert_eq!(corrupt_offset(&err), (len - 8) as u64, "{err}");
 }
+
+/// Every input that once crashed the `mcap_bag` fuzz target (fuzz/regressions/mcap_bag/)
+/// opens or fails with an error, and streams to its end, without a panic (this test
+/// binary has overflow checks on, as the fuzz build has).
+#[test]
+fn the_fuzz_regressions_read_without_a_panic() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fuzz/regressions/mcap_bag");
+    let mut files = 0;
+    for entry in std::fs::read_dir(&dir).unwrap() {
+        let path = entry.unwrap().path();
+        files += 1;
+        if let Ok(bag) = BagReader::open(&path) {
+            let read = bag.messages().unwrap().count();
+            assert!(read < 10_000, "{}: {read} items", path.display());
+        }
+    }
+    assert!(files >= 2, "regressions missing from {}", dir.display());
+}

@@ -237,3 +237,39 @@ fn laser_scan_converts_to_the_extractor_type() {
     assert_eq!(view.range_max, 30.0);
     assert_eq!(LaserScan::type_name(), "sensor_msgs/msg/LaserScan");
 }
+
+/// `close_chunks_every(1 s)`: 3.5 s of messages at 10 Hz make four chunks, each spanning
+/// less than 1 s of log time, and a copy cut anywhere after the first chunk still gives
+/// every message of the chunks before the cut.
+#[test]
+fn chunks_closed_by_log_time_bound_what_a_cut_loses() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("timed.mcap");
+    let mut writer = BagWriter::create(&path).unwrap();
+    writer.close_chunks_every(1_000_000_000);
+    let times: Vec<u64> = (0..35).map(|i| 1_000_000_000 + i * 100_000_000).collect();
+    for t in &times {
+        writer.write("/scan", &scan(*t, 100)).unwrap();
+    }
+    writer.finish().unwrap();
+    let bytes = std::fs::read(&path).unwrap();
+    let chunks = mcap::Summary::read(&bytes).unwrap().unwrap().chunk_indexes;
+    assert_eq!(chunks.len(), 4);
+    for c in &chunks {
+        assert!(c.message_end_time - c.message_start_time < 1_000_000_000);
+    }
+    for c in &chunks[1..] {
+        // Cut inside chunk c: everything logged before it survives.
+        let cut = (c.chunk_start_offset + c.chunk_length / 2) as usize;
+        let cut_path = dir.path().join(format!("cut_{cut}.mcap"));
+        std::fs::write(&cut_path, &bytes[..cut]).unwrap();
+        let (delivered, _) = mcap_common::read_all(&cut_path);
+        let expected: Vec<u64> = times
+            .iter()
+            .copied()
+            .filter(|t| *t < c.message_start_time)
+            .collect();
+        let got: Vec<u64> = delivered.iter().map(|(t, _)| *t).collect();
+        assert_eq!(got, expected);
+    }
+}

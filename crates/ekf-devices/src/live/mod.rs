@@ -29,6 +29,11 @@ use std::sync::Arc;
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 use workers::{Data, DeviceCounters, Reading};
 
+/// Log time a chunk of the recording spans before it is closed and synced to the disk:
+/// what a hard kill or a power cut can lose at most (the recording then has no summary,
+/// and `ekf replay` rebuilds its index from the chunks).
+pub const RECORDING_CHUNK_NS: u64 = 1_000_000_000;
+
 /// Topic of the device diagnostics in a recording.
 pub const DEVICE_DIAGNOSTICS_TOPIC: &str = "/diagnostics";
 /// Topic of the GPS fixes in a recording.
@@ -539,6 +544,9 @@ impl<'a> Live<'a> {
             // as it is handed on.
             0,
         )?;
+        if let Some(out) = run.output() {
+            out.writer().close_chunks_every(RECORDING_CHUNK_NS);
+        }
         let mut recorder = Recorder::new(Path::new(&name));
         let at = recorder.record_at(run.output(), &config.topics.tf_static, t0, &tf)?;
         run.handle_decoded(&at.channel, at.log_time, at.log_time, tf.into())?;

@@ -96,6 +96,25 @@ pub(crate) fn check_records(mut section: &[u8]) -> Result<(), McapError> {
     Ok(())
 }
 
+/// Checks the chunk record `body` ([`check_record`]) and, if its records are stored
+/// uncompressed, their framing and layouts too ([`check_records`]): the `mcap` crate's
+/// linear reader subtracts an inner record's length from what is left of an
+/// uncompressed chunk without checking it (found by the `mcap_bag` fuzz target: an
+/// overflow panic in debug builds, a wrapped count in release builds). Compressed
+/// records are bounded by the decompressor.
+pub(crate) fn check_chunk(body: &[u8]) -> Result<(), McapError> {
+    check_record(op::CHUNK, body)?;
+    let name_at = 28;
+    let name_len = read_len(body, name_at, 4)? as usize;
+    let size_at = name_at + 4 + name_len;
+    // check_record has seen that the size fits in the body.
+    let records_len = read_len(body, size_at, 8)? as usize;
+    if name_len == 0 {
+        check_records(&body[size_at + 8..size_at + 8 + records_len])?;
+    }
+    Ok(())
+}
+
 /// The little-endian length of `width` bytes at `at`.
 fn read_len(body: &[u8], at: usize, width: usize) -> Result<u64, McapError> {
     let bytes = at
@@ -175,5 +194,33 @@ mod tests {
         section.extend((body.len() as u64).to_le_bytes());
         section.extend(&body);
         assert!(check_records(&section).is_err());
+    }
+
+    /// An uncompressed chunk holding `records`.
+    fn chunk(records: &[u8]) -> Vec<u8> {
+        let mut body = vec![0u8; 28];
+        body.extend(0u32.to_le_bytes());
+        body.extend((records.len() as u64).to_le_bytes());
+        body.extend(records);
+        body
+    }
+
+    #[test]
+    fn an_uncompressed_chunk_whose_record_overruns_it_is_refused() {
+        // The fuzz target's second find: a message record claiming more than the chunk.
+        let mut message = vec![op::MESSAGE];
+        message.extend(22u64.to_le_bytes());
+        message.extend([0u8; 22]);
+        check_chunk(&chunk(&message)).unwrap();
+        assert!(mcap::parse_record(op::CHUNK, &chunk(&message)).is_ok());
+        message[1..9].copy_from_slice(&23u64.to_le_bytes());
+        assert!(check_chunk(&chunk(&message)).is_err());
+        message[1..9].copy_from_slice(&u64::MAX.to_le_bytes());
+        assert!(check_chunk(&chunk(&message)).is_err());
+        // The chunk's data size, not the record's end, bounds the records.
+        message[1..9].copy_from_slice(&22u64.to_le_bytes());
+        let mut short = chunk(&message);
+        short[32..40].copy_from_slice(&((message.len() - 1) as u64).to_le_bytes());
+        assert!(check_chunk(&short).is_err());
     }
 }

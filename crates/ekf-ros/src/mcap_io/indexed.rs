@@ -1,7 +1,7 @@
 //! Messages in log-time order through the chunk indexes, around the `mcap` crate's sans-io
 //! `IndexedReader`, with each chunk's CRC checked before any of its messages is delivered.
 
-use super::guard::check_record;
+use super::guard::{check_chunk, check_record};
 use super::message::ChannelInfo;
 use super::source::{LostRange, Raw, SourceError, MAX_RECORD_BYTES};
 use mcap::records::{op, ChunkIndex, Record};
@@ -190,13 +190,15 @@ fn reader_from(summary: &Summary, from_ns: Option<u64>) -> Result<IndexedReader,
     IndexedReader::new_with_options(summary, options)
 }
 
-/// Decompresses the chunk record whose body (without opcode and length) is `body`, checks
-/// its CRC before anything else, then calls `each(opcode, body)` for every record inside
-/// it. Uses the same size limit as the readers.
+/// Checks the lengths of the chunk record whose body (without opcode and length) is
+/// `body` ([`check_chunk`]), decompresses it, checks its CRC before anything else, then
+/// calls `each(opcode, body)` for every record inside it. Uses the same size limit as
+/// the readers.
 pub(crate) fn for_each_chunk_record(
     body: &[u8],
     mut each: impl FnMut(u8, &[u8]) -> Result<(), McapError>,
 ) -> Result<(), McapError> {
+    check_chunk(body)?;
     let options = LinearReaderOptions::default()
         .with_skip_start_magic(true)
         .with_skip_end_magic(true)
