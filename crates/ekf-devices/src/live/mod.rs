@@ -154,6 +154,11 @@ pub struct LiveSummary {
     /// Base reads refused: an encoder change no wheel can make in the time, or a
     /// sample counter that stepped back (the controller restarted its counts).
     pub base_implausible_samples: u64,
+    /// Base reconnections after which the controller had counted on: the wheel motion
+    /// of the outage was kept (fused as one step, its noise growing with the distance).
+    pub base_outages_bridged: u64,
+    /// Base reconnections to a restarted controller: the motion of the outage is lost.
+    pub base_restarts: u64,
     /// Compass bearings out of range (not fused).
     pub compass_invalid: u64,
     /// GPS fixes recorded.
@@ -179,6 +184,14 @@ impl std::fmt::Display for LiveSummary {
         }
         for (device, n) in &self.reconnects {
             writeln!(f, "  {device}: reconnected {n} times")?;
+        }
+        if self.base_outages_bridged + self.base_restarts > 0 {
+            writeln!(
+                f,
+                "  base after reconnecting: the motion of the outage kept {} times, the \
+                 controller restarted {} times",
+                self.base_outages_bridged, self.base_restarts
+            )?;
         }
         if let Some(r) = &self.recording {
             writeln!(f, "  recording: {r}")?;
@@ -471,12 +484,12 @@ struct BaseTicks {
 
 impl BaseTicks {
     /// The wheel positions after `reading`, made at `t_ns` and received on the base
-    /// worker's connection `connection` ([`EncoderTracker::update`]). A new connection
-    /// may be a power-cycled controller, whose counts and counter restart at 0: its
-    /// first read is a new reference.
+    /// worker's connection `connection` ([`EncoderTracker::update`]). After a new
+    /// connection the first read tells whether the controller counted on while the line
+    /// was down (the motion of the outage is kept) or restarted (a new reference).
     fn update(&mut self, reading: BaseReading, connection: u64, t_ns: u64) -> Option<WheelTicks> {
         if connection != self.connection {
-            self.tracker.restart();
+            self.tracker.reconnected();
             self.connection = connection;
         }
         self.tracker.update(reading, t_ns)
@@ -570,6 +583,8 @@ impl<'a> Live<'a> {
                 base_repeated_samples: 0,
                 base_missed_samples: 0,
                 base_implausible_samples: 0,
+                base_outages_bridged: 0,
+                base_restarts: 0,
                 compass_invalid: 0,
                 gps_fixes: 0,
                 late_readings: 0,
@@ -727,11 +742,20 @@ impl<'a> Live<'a> {
         self.diagnostics(vec![status(device, level, text, Vec::new())])
     }
 
+    /// The encoder tracker's counts, into the summary.
+    fn copy_base_counts(&mut self) {
+        let t = &self.base.tracker;
+        let s = &mut self.summary;
+        s.base_repeated_samples = t.repeated;
+        s.base_missed_samples = t.missed;
+        s.base_implausible_samples = t.implausible;
+        s.base_outages_bridged = t.outages_bridged;
+        s.base_restarts = t.restarts;
+    }
+
     /// Every device's counters as one diagnostics message.
     fn counters_diagnostics(&mut self) -> Result<(), LiveError> {
-        self.summary.base_repeated_samples = self.base.tracker.repeated;
-        self.summary.base_missed_samples = self.base.tracker.missed;
-        self.summary.base_implausible_samples = self.base.tracker.implausible;
+        self.copy_base_counts();
         let statuses = self
             .counters
             .iter()
@@ -776,9 +800,7 @@ impl<'a> Live<'a> {
         started: Instant,
         failure: Option<LiveError>,
     ) -> Result<LiveOutcome, LiveError> {
-        self.summary.base_repeated_samples = self.base.tracker.repeated;
-        self.summary.base_missed_samples = self.base.tracker.missed;
-        self.summary.base_implausible_samples = self.base.tracker.implausible;
+        self.copy_base_counts();
         let outcome = self.run.finish(started, None)?;
         self.summary.filter = outcome.summary;
         self.summary.devices = self
@@ -937,6 +959,8 @@ mod tests {
             base_repeated_samples: 0,
             base_missed_samples: 0,
             base_implausible_samples: 0,
+            base_outages_bridged: 0,
+            base_restarts: 0,
             compass_invalid: 0,
             gps_fixes: 0,
             late_readings: 0,

@@ -1,6 +1,7 @@
 //! Cumulative wheel ticks from successive register reads: 32-bit counters unwrapped
-//! (wrapping differences), repeated samples skipped, missed samples counted, and changes
-//! no wheel can make (a controller that restarted its counts) refused.
+//! (wrapping differences), repeated samples skipped, missed samples counted, changes no
+//! wheel can make (a controller that restarted its counts) refused, and the motion the
+//! controller counted while its line was down kept.
 
 use super::BaseReading;
 
@@ -27,6 +28,15 @@ pub struct EncoderTracker {
     /// Reads refused: an encoder changed by more than a wheel can turn in the time, or
     /// the sample counter stepped back (the controller restarted).
     pub implausible: u64,
+    /// Reconnections after which the controller had kept counting (its sample counter
+    /// went on, the encoders moved no more than the wheels can): the motion of the
+    /// outage was kept.
+    pub outages_bridged: u64,
+    /// Reconnections to a controller that had restarted (counter or counts from 0): the
+    /// motion of the outage is lost, the positions carry on from where they were.
+    pub restarts: u64,
+    /// A reconnection happened since the last read.
+    reconnected: bool,
 }
 
 impl EncoderTracker {
@@ -39,14 +49,20 @@ impl EncoderTracker {
             repeated: 0,
             missed: 0,
             implausible: 0,
+            outages_bridged: 0,
+            restarts: 0,
+            reconnected: false,
         }
     }
 
-    /// The controller was (re)connected: its counts and sample counter may have
-    /// restarted, so the next read is a new reference; the positions carry on from
-    /// where they were (the motion while it was away is lost).
-    pub fn restart(&mut self) {
-        self.last = None;
+    /// The controller was reconnected. If the line went down but the controller kept
+    /// running (an unplugged cable, a silent RS-485 adapter), its counts went on: the
+    /// next read then differs from the last by the motion of the outage, which is kept.
+    /// If it restarted (a power cycle), its counts and sample counter begin again: the
+    /// next read is a new reference and the positions carry on from where they were.
+    /// The next read tells which (see [`Self::update`]).
+    pub fn reconnected(&mut self) {
+        self.reconnected = true;
     }
 
     /// The wheel positions after this read at `t_ns`, or `None` if it repeats the last
@@ -54,7 +70,13 @@ impl EncoderTracker {
     /// between reads moves by less than 2³¹ ticks). A change larger than the wheels can
     /// make since the reference read, or a sample counter that steps back, is refused and
     /// counted; the read becomes the new reference (the controller restarted its counts).
+    ///
+    /// The first read after [`Self::reconnected`] is judged the same way: a counter that
+    /// went on and a change the wheels can make in the time away is the motion of the
+    /// outage, kept ([`Self::outages_bridged`]); otherwise the controller restarted, and
+    /// the read is a new reference with no motion ([`Self::restarts`]).
     pub fn update(&mut self, reading: BaseReading, t_ns: u64) -> Option<WheelTicks> {
+        let reconnected = std::mem::take(&mut self.reconnected);
         let Some((last, last_ns)) = self.last else {
             self.last = Some((reading, t_ns));
             return Some(self.totals);
@@ -70,10 +92,18 @@ impl EncoderTracker {
         let possible = self.max_ticks_per_s * t_ns.saturating_sub(last_ns) as f64 * 1e-9 + 2.0;
         self.last = Some((reading, t_ns));
         if jump >= 0x8000 || left.abs() as f64 > possible || right.abs() as f64 > possible {
+            if reconnected {
+                self.restarts += 1;
+                return Some(self.totals);
+            }
             self.implausible += 1;
             return None;
         }
-        self.missed += u64::from(jump - 1);
+        if reconnected {
+            self.outages_bridged += 1;
+        } else {
+            self.missed += u64::from(jump - 1);
+        }
         self.totals.left += left;
         self.totals.right += right;
         Some(self.totals)
@@ -146,19 +176,39 @@ mod tests {
                 right: -46
             })
         );
-        // Reconnected after a power cycle: the next read only sets the reference,
-        // even one that would be plausible (the counter stepped on by chance).
-        t.restart();
+        // Reconnected after the line was down 0.6 s while the controller ran on: its
+        // counter went on by one (it latched nothing meanwhile) and the wheels moved no
+        // more than they can in 0.6 s: the motion of the outage is kept.
+        t.reconnected();
         assert_eq!(
             t.update(read(40, 40, 3), 9 * S / 10),
             Some(WheelTicks {
-                left: 110,
-                right: -46
+                left: 137,
+                right: -11
             })
         );
-        assert_eq!(t.implausible, 1);
+        assert_eq!((t.outages_bridged, t.restarts, t.implausible), (1, 0, 1));
         // More ticks than a wheel turns in the time: refused.
         assert_eq!(t.update(read(40 + 103, 40, 4), 10 * S / 10), None);
         assert_eq!(t.implausible, 2);
+        // Reconnected to a power-cycled controller: counter and counts from 0. No
+        // motion, and not counted as implausible: a restart is what a reconnection can be.
+        t.reconnected();
+        assert_eq!(
+            t.update(read(2, 3, 1), 20 * S / 10),
+            Some(WheelTicks {
+                left: 137,
+                right: -11
+            })
+        );
+        assert_eq!((t.outages_bridged, t.restarts, t.implausible), (1, 1, 2));
+        // The restarted controller is the reference now.
+        assert_eq!(
+            t.update(read(12, 3, 2), 21 * S / 10),
+            Some(WheelTicks {
+                left: 147,
+                right: -11
+            })
+        );
     }
 }
