@@ -77,10 +77,13 @@ fn plausible_chunk(bytes: &[u8], offset: u64, file_len: u64) -> Option<u64> {
     };
     let len = u64_at(1)?;
     let min_len = (BEFORE_NAME + 4 + 8) as u64;
+    if len < min_len || len > MAX_RECORD_BYTES as u64 {
+        return None;
+    }
     let fits = offset
         .checked_add(PREFIX as u64 + len)
         .is_some_and(|end| end <= file_len);
-    if len < min_len || len > MAX_RECORD_BYTES as u64 || !fits {
+    if !fits {
         return None;
     }
     let name_at = PREFIX + BEFORE_NAME;
@@ -170,6 +173,19 @@ mod tests {
                 "junk {junk_len}"
             );
         }
+    }
+
+    #[test]
+    fn a_chunk_opcode_before_a_huge_length_is_passed_over() {
+        // The fuzz target's third find: u64::MAX as a length (the placeholder the MCAP
+        // writer leaves in the chunk it was writing when a recording is killed)
+        // overflowed the end offset.
+        let mut bytes = vec![op::CHUNK];
+        bytes.extend(u64::MAX.to_le_bytes());
+        bytes.extend([0u8; 64]);
+        bytes.extend(chunk_record());
+        let (_dir, mut file, len) = file_with(&bytes);
+        assert_eq!(next_chunk(&mut file, 0, len).unwrap(), Some(73));
     }
 
     #[test]
