@@ -284,10 +284,37 @@ fn an_undecodable_message_is_skipped_and_counted() {
     }
     writer.finish().expect("finish");
 
-    let summary = replay_json(&bad, &[]);
+    let out = dir.path().join("bad_scan.out.mcap");
+    let summary = replay_json(&bad, &["--out", p(&out)]);
     assert_eq!(summary["undecodable"], 1, "{summary:#}");
+    assert_eq!(summary["checks"]["undecodable"], 1, "{summary:#}");
     let warning = &summary["warnings"][0];
     assert_eq!(warning["topic"], "/scan");
+    assert_eq!(warning["check"], "undecodable");
+    // The output bag says so on /ekf/diagnostics: an `ekf/input` status naming the check.
+    let statuses: Vec<_> = BagReader::open(&out)
+        .expect("output bag")
+        .messages()
+        .expect("stream")
+        .map(|m| m.expect("output bag intact"))
+        .filter_map(|m| match m.decode() {
+            Ok(ekf_cli::ros2::AnyMessage::DiagnosticArray(a)) => Some(a),
+            _ => None,
+        })
+        .flat_map(|a| a.status)
+        .filter(|s| s.name == "ekf/input")
+        .collect();
+    assert_eq!(statuses.len(), 1);
+    let value = |k: &str| {
+        statuses[0]
+            .values
+            .iter()
+            .find(|v| v.key == k)
+            .map(|v| v.value.clone())
+    };
+    assert_eq!(value("check").as_deref(), Some("undecodable"));
+    assert_eq!(value("topic").as_deref(), Some("/scan"));
+    assert_eq!(value("count").as_deref(), Some("1"));
     assert_eq!(warning["log_time_ns"], cut_at);
     assert!(
         warning["reason"]

@@ -50,12 +50,12 @@ fn run(log: &Path) -> (f64, ReplaySummary) {
 }
 
 /// Replays the bag broken by `f` (with the first-scan map, or the room's if
-/// `given_map`); checks the RMSE bound and that the first warning is on `topic` and says
-/// `says`.
+/// `given_map`); checks the RMSE bound, that the first warning is on `topic`, names the
+/// check `check` and says `says`, and that the summary counts every warning by check.
 fn check_with(
     given_map: bool,
     name: &str,
-    topic: &str,
+    (topic, check): (&str, &str),
     says: &str,
     f: impl FnMut(&str, u64, &mut AnyMessage),
 ) {
@@ -72,12 +72,24 @@ fn check_with(
         s.warning_count, first.reason
     );
     assert_eq!(first.topic, topic, "{name}");
+    assert_eq!(first.check, check, "{name}");
     assert!(first.reason.contains(says), "{name}: {}", first.reason);
+    assert!(
+        s.checks.get(check).copied().unwrap_or(0) >= 1,
+        "{name}: {:?}",
+        s.checks
+    );
+    assert_eq!(s.checks.values().sum::<u64>(), s.warning_count, "{name}");
     assert!(rmse <= 0.05, "{name}: position RMSE {rmse:.4} m");
 }
 
-fn check(name: &str, topic: &str, says: &str, f: impl FnMut(&str, u64, &mut AnyMessage)) {
-    check_with(false, name, topic, says, f)
+fn check(
+    name: &str,
+    topic_and_check: (&str, &str),
+    says: &str,
+    f: impl FnMut(&str, u64, &mut AnyMessage),
+) {
+    check_with(false, name, topic_and_check, says, f)
 }
 
 const T0: u64 = 20_000_000_000;
@@ -94,7 +106,7 @@ fn encoder_angles_that_stand_still_while_the_velocities_turn_give_way_to_the_vel
     let mut first: Option<Vec<f64>> = None;
     check(
         "joints stuck",
-        "/joint_states",
+        ("/joint_states", "encoders_contradict_velocities"),
         "the velocities are used",
         |topic, _, m| {
             if let (AnyMessage::JointState(js), "/joint_states") = (m, topic) {
@@ -116,7 +128,12 @@ fn an_encoder_spike_and_an_encoder_step_are_skipped() {
             }
         }
     };
-    check("spike", "/joint_states", "encoder increment", spike);
+    check(
+        "spike",
+        ("/joint_states", "implausible"),
+        "encoder increment",
+        spike,
+    );
     let step = |topic: &str, t: u64, m: &mut AnyMessage| {
         if let (AnyMessage::JointState(js), "/joint_states") = (m, topic) {
             if t >= T0 {
@@ -124,14 +141,19 @@ fn an_encoder_spike_and_an_encoder_step_are_skipped() {
             }
         }
     };
-    check("step", "/joint_states", "encoder increment", step);
+    check(
+        "step",
+        ("/joint_states", "implausible"),
+        "encoder increment",
+        step,
+    );
 }
 
 #[test]
 fn a_stuck_compass_is_not_fused() {
     check(
         "compass stuck",
-        "/compass",
+        ("/compass", "compass_stuck"),
         "do not follow",
         |topic, _, m| {
             if let (AnyMessage::Imu(imu), "/compass") = (m, topic) {
@@ -150,7 +172,7 @@ fn a_biased_compass_does_not_override_the_laser_against_a_given_map() {
     check_with(
         true,
         "compass +30°",
-        "/compass",
+        ("/compass", "compass_against_laser"),
         "recovery was refused",
         |topic, _, m| {
             if let (AnyMessage::Imu(imu), "/compass") = (m, topic) {
@@ -165,7 +187,7 @@ fn a_biased_compass_does_not_override_the_laser_against_a_given_map() {
 fn a_non_unit_quaternion_is_refused() {
     check(
         "quaternion ×1.3",
-        "/compass",
+        ("/compass", "implausible"),
         "unit quaternion",
         |topic, _, m| {
             if let (AnyMessage::Imu(imu), "/compass") = (m, topic) {

@@ -128,6 +128,25 @@ pub enum Skip {
     },
 }
 
+impl Skip {
+    /// The name of the check that skipped the input, as the summaries and diagnostics
+    /// count it (`duplicate_stamp`, `time_not_increasing`, `non_finite`, `not_provided`,
+    /// `first`, `implausible`).
+    pub fn check(&self) -> &'static str {
+        match self {
+            Skip::TimeNotIncreasing {
+                previous_ns,
+                stamp_ns,
+            } if previous_ns == stamp_ns => "duplicate_stamp",
+            Skip::TimeNotIncreasing { .. } => "time_not_increasing",
+            Skip::NonFinite { .. } => "non_finite",
+            Skip::NotProvided { .. } => "not_provided",
+            Skip::First => "first",
+            Skip::Implausible { .. } => "implausible",
+        }
+    }
+}
+
 impl fmt::Display for Skip {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {

@@ -90,6 +90,17 @@ pub enum FixRefused {
     },
 }
 
+impl FixRefused {
+    /// The name of the check, as the summary and diagnostics count it.
+    pub fn check(&self) -> &'static str {
+        match self {
+            FixRefused::NoFix { .. } => "gps_no_fix",
+            FixRefused::OffTheGlobe { .. } => "gps_off_the_globe",
+            FixRefused::BadCovariance { .. } => "gps_bad_covariance",
+        }
+    }
+}
+
 impl std::fmt::Display for FixRefused {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {

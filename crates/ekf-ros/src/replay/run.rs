@@ -22,6 +22,7 @@ use ekf_fusion::{
 };
 use lrf_lines::{ScanStage, StageClock};
 use nalgebra::Matrix3;
+use std::collections::HashMap;
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -48,6 +49,9 @@ impl StageClock for StageTimer {
         self.stages[i].record(us);
     }
 }
+
+/// Least log time between two `ekf/input` diagnostics of the same check (ns).
+const FLAG_DIAGNOSTICS_EVERY_NS: u64 = 1_000_000_000;
 
 /// Compass readings in a row that do not follow the robot's turns before a warning says
 /// so (a single one is an outlier).
@@ -100,6 +104,8 @@ pub struct Run<'a> {
     compass_not_following: u32,
     /// Events and lost scans, if trajectories are kept.
     events: Option<events::EventLog>,
+    /// Log time of the last `ekf/input` diagnostics written per check.
+    flagged_at: HashMap<&'static str, u64>,
 }
 
 impl<'a> Run<'a> {
@@ -188,6 +194,7 @@ impl<'a> Run<'a> {
             wheels_contradicted: false,
             compass_not_following: 0,
             events: options.keep_trajectories.then(events::EventLog::default),
+            flagged_at: HashMap::new(),
         };
         if let Some(out) = run.out.as_mut() {
             if options.map.is_some() {
@@ -278,6 +285,39 @@ impl<'a> Run<'a> {
         })
     }
 
+    /// A message skipped or flagged by `check`: counted and warned about in the summary,
+    /// and an `ekf/input` status on `/ekf/diagnostics` with the count so far (the first
+    /// of each check, then at most one a second of log time).
+    fn flag(
+        &mut self,
+        topic: &str,
+        log_time: u64,
+        check: &'static str,
+        reason: String,
+    ) -> Result<(), ReplayError> {
+        let count = self.summary.warn(topic, log_time, check, reason.clone());
+        let due = self
+            .flagged_at
+            .get(check)
+            .is_none_or(|last| log_time >= last.saturating_add(FLAG_DIAGNOSTICS_EVERY_NS));
+        if let (true, Some(out)) = (due, &mut self.out) {
+            self.flagged_at.insert(check, log_time);
+            let values = vec![
+                ("topic", topic.to_owned()),
+                ("check", check.to_owned()),
+                ("count", count.to_string()),
+            ];
+            out.diagnostics(
+                log_time,
+                "ekf/input",
+                DiagnosticStatus::WARN,
+                &reason,
+                values,
+            )?;
+        }
+        Ok(())
+    }
+
     /// Damage the reader read past: a warning, an entry in the summary's `damaged` list,
     /// a diagnostics message in the output bag and a comment in the TUM file, each
     /// saying which log times were lost. `false` if `e` is not such damage (it ends the
@@ -287,8 +327,12 @@ impl<'a> Run<'a> {
             return Ok(false);
         };
         let t_ns = stretch.lost.from_ns.unwrap_or(0);
-        self.summary
-            .warn(&stretch.file, t_ns, format!("damaged chunk read past: {e}"));
+        self.summary.warn(
+            &stretch.file,
+            t_ns,
+            "damaged_log",
+            format!("damaged chunk read past: {e}"),
+        );
         let text = format!(
             "{} at byte {} read past ({}): {}",
             stretch.file, stretch.byte_offset, stretch.lost, stretch.reason
@@ -328,20 +372,23 @@ impl<'a> Run<'a> {
             Ok(decoded) => decoded,
             Err(_) if role == Role::Reference => {
                 self.count(message.topic());
-                self.summary.warn(
+                return self.flag(
                     message.topic(),
                     message.log_time,
+                    "reference_invalid",
                     "reference pose is not finite or not decodable".into(),
                 );
-                return Ok(());
             }
             // One undecodable message is skipped, not the end of the log.
             Err(e) => {
                 self.count(message.topic());
                 self.summary.undecodable += 1;
-                self.summary
-                    .warn(message.topic(), message.log_time, format!("skipped: {e}"));
-                return Ok(());
+                return self.flag(
+                    message.topic(),
+                    message.log_time,
+                    "undecodable",
+                    format!("skipped: {e}"),
+                );
             }
         };
         let stamp = stamps::stamp_of(message);
@@ -371,15 +418,13 @@ impl<'a> Run<'a> {
         };
         if let Err(late) = self.localizer.push(stamp, input, tag) {
             let (_, tag) = &late.item;
-            self.summary.warn(
-                &tag.channel.topic,
-                tag.log_time,
-                format!(
-                    "stamped {} ns, before {} ns already fused: more than [timing] max_lag \
-                     late, dropped",
-                    late.stamp, late.after
-                ),
+            let reason = format!(
+                "stamped {} ns, before {} ns already fused: more than [timing] max_lag late, \
+                 dropped",
+                late.stamp, late.after
             );
+            let (topic, log_time) = (tag.channel.topic.clone(), tag.log_time);
+            self.flag(&topic, log_time, "too_late", reason)?;
         }
         while let Some(step) = self.localizer.next_ready(&mut self.timer) {
             self.report(step?)?;
@@ -466,7 +511,7 @@ impl<'a> Run<'a> {
                 match gps_position(&fix, &self.config.gps, map_offset) {
                     Ok((x, y, covariance)) => Ok(Input::Position { x, y, covariance }),
                     Err(refused) => {
-                        self.summary.warn(topic, log_time, refused.to_string());
+                        self.flag(topic, log_time, refused.check(), refused.to_string())?;
                         return Ok(None);
                     }
                 }
@@ -474,11 +519,12 @@ impl<'a> Run<'a> {
             (Role::Reference, message) => match reference_pose(&message) {
                 Some(pose) => Ok(Input::Reference(pose)),
                 None => {
-                    self.summary.warn(
+                    self.flag(
                         topic,
                         log_time,
+                        "reference_invalid",
                         "reference pose is not finite or not decodable".into(),
-                    );
+                    )?;
                     return Ok(None);
                 }
             },
@@ -487,7 +533,7 @@ impl<'a> Run<'a> {
         match converted {
             Ok(input) => Ok(Some(input)),
             Err(skip) => {
-                self.summary.warn(topic, log_time, skip.to_string());
+                self.flag(topic, log_time, skip.check(), skip.to_string())?;
                 Ok(None)
             }
         }
@@ -506,35 +552,37 @@ impl<'a> Run<'a> {
             }
             Fused::MotionFromVelocities(seen) => {
                 if !std::mem::replace(&mut self.wheels_contradicted, true) {
-                    self.summary.warn(
+                    self.flag(
                         &channel.topic,
                         *log_time,
+                        "encoders_contradict_velocities",
                         format!(
                             "position: the encoder angles moved ({:.4}, {:.4}) rad over the \
                              interval while the velocities say ({:.4}, {:.4}) rad: stuck \
                              encoder counts? the velocities are used",
                             seen.angles[0], seen.angles[1], seen.velocities[0], seen.velocities[1]
                         ),
-                    );
+                    )?;
                 }
                 self.record_pose(now)?;
             }
             Fused::Skipped(Skip::First) | Fused::BeforeStart => {}
-            Fused::Skipped(skip) => self
-                .summary
-                .warn(&channel.topic, *log_time, skip.to_string()),
+            Fused::Skipped(skip) => {
+                self.flag(&channel.topic, *log_time, skip.check(), skip.to_string())?
+            }
             Fused::Heading { heading, update } => {
                 if update.refused_by_laser {
-                    self.summary.warn(
+                    self.flag(
                         &channel.topic,
                         *log_time,
+                        "compass_against_laser",
                         format!(
                             "heading {heading:.4} rad: {} readings in a row failed the gate \
                              and the lock-out recovery was refused: the last scan's lines fit \
                              the filter's heading better (a stuck or biased compass?)",
                             update.rejected_in_a_row
                         ),
-                    );
+                    )?;
                 }
                 // One reading that does not follow is an outlier, which the gate would
                 // have refused too; a stretch of them is a stuck or broken compass.
@@ -543,21 +591,24 @@ impl<'a> Run<'a> {
                     false => 0,
                 };
                 if self.compass_not_following == NOT_FOLLOWING_WARNED_AFTER {
-                    self.summary.warn(
+                    self.flag(
                         &channel.topic,
                         *log_time,
+                        "compass_stuck",
                         format!(
                             "heading {heading:.4} rad: {NOT_FOLLOWING_WARNED_AFTER} readings in \
                              a row do not follow the robot's turns as odometry measured them \
                              (a stuck compass?); not fused"
                         ),
-                    );
+                    )?;
                 }
                 self.heading(now, heading, &update)?
             }
             Fused::Position(_) => self.record_pose(now)?,
             Fused::Scan(fused) => self.scan(now, &fused)?,
-            Fused::ScanRefused(e) => self.summary.warn(&channel.topic, *log_time, e.to_string()),
+            Fused::ScanRefused(e) => {
+                self.flag(&channel.topic, *log_time, "scan_refused", e.to_string())?
+            }
             Fused::Reference(pose) => self.poses.reference(StampedPose::new(now, pose)),
             // A scan in a mode without the laser: the state at its stamp, as a pose.
             Fused::NotFused if matches!(step.input, Input::Scan(_)) => self.record_pose(now)?,

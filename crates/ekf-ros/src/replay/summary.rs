@@ -116,6 +116,8 @@ pub struct Warning {
     pub topic: String,
     /// Its log time (ns).
     pub log_time_ns: u64,
+    /// The check that skipped or flagged it (the key of [`ReplaySummary::checks`]).
+    pub check: String,
     /// Why it was skipped.
     pub reason: String,
 }
@@ -164,6 +166,10 @@ pub struct ReplaySummary {
     pub too_late: u64,
     /// The first skipped messages with their reasons (at most 20).
     pub warnings: Vec<Warning>,
+    /// Messages skipped or flagged, by the check that did it (`duplicate_stamp`,
+    /// `implausible`, `compass_stuck`, `gps_off_the_globe`, `damaged_log`, …); they sum
+    /// to `warning_count`.
+    pub checks: BTreeMap<String, u64>,
     /// Accuracy against the reference, when the log has one.
     pub accuracy: Option<Accuracy>,
     /// What about the log or the configuration a user may want to act on, e.g. a
@@ -213,16 +219,22 @@ impl DamagedStretch {
 pub const MAX_WARNINGS: usize = 20;
 
 impl ReplaySummary {
-    /// Records a skipped message.
-    pub fn warn(&mut self, topic: &str, log_time_ns: u64, reason: String) {
+    /// Records a message skipped or flagged by `check`; returns how many `check` has
+    /// counted.
+    pub fn warn(&mut self, topic: &str, log_time_ns: u64, check: &str, reason: String) -> u64 {
         self.warning_count += 1;
+        let count = self.checks.entry(check.to_owned()).or_default();
+        *count += 1;
+        let count = *count;
         if self.warnings.len() < MAX_WARNINGS {
             self.warnings.push(Warning {
                 topic: topic.into(),
                 log_time_ns,
+                check: check.into(),
                 reason,
             });
         }
+        count
     }
 }
 
@@ -374,7 +386,7 @@ mod tests {
             wall time 0.12 s\n";
         assert_eq!(s.to_string(), quiet);
         s.gps.accepted = 3;
-        s.warn("/scan", 42, "bad".into());
+        s.warn("/scan", 42, "test", "bad".into());
         s.tracking.searches = 2;
         s.tracking.locked_on_scan = Some(7);
         s.tracking.lost_at_end = 1;

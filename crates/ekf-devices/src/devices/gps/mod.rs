@@ -150,9 +150,18 @@ impl NmeaReader {
         };
         let text = text.trim_end_matches('\r');
         let sentence = self.parse_sentence(text);
-        let Sentence::Fix(_) = sentence else {
+        let Sentence::Fix(fix) = &sentence else {
             return sentence;
         };
+        // The sentence's checksum can be right and its numbers still off the globe (a
+        // receiver's bug, a corrupted field with a recomputed checksum).
+        if !(fix.latitude.abs() <= 90.0 && fix.longitude.abs() <= 180.0) {
+            return Sentence::Invalid(format!(
+                "{text:?}: fix off the globe: latitude {}° (expected within ±90), longitude \
+                 {}° (expected within ±180)",
+                fix.latitude, fix.longitude
+            ));
+        }
         // The time field: the second field of GGA and RMC.
         let epoch = text.split(',').nth(1).unwrap_or_default();
         if !epoch.is_empty() && self.last_epoch.as_deref() == Some(epoch) {
@@ -262,6 +271,34 @@ mod tests {
         assert_eq!(r.counters.fixes, 2);
         // Line ends alone say nothing.
         assert!(r.push(b"\r\n\n\r\n").is_empty());
+    }
+
+    #[test]
+    fn a_fix_off_the_globe_is_invalid_with_its_numbers() {
+        let mut r = NmeaReader::new();
+        // (NMEA latitudes have two degree digits: 100.67° cannot be written; longitudes
+        // have three.)
+        let found = r.push(sentences(45.5, 181.5, 12.5, 0.9, 10.0).as_bytes());
+        let Sentence::Invalid(why) = &found[0] else {
+            panic!("{found:?}");
+        };
+        assert!(
+            why.ends_with(
+                "fix off the globe: latitude 45.5° (expected within ±90), longitude 181.5° \
+                 (expected within ±180)"
+            ),
+            "{why}"
+        );
+        // The RMC after it adds nothing (GGA is the fix sentence).
+        assert_eq!((r.counters.fixes, r.counters.invalid), (0, 1), "{found:?}");
+        // The nmea_sentences fuzz target's find (fuzz/regressions/nmea_sentences/): two
+        // degree digits, and 96.23° all the same ("96" degrees, 14.038 minutes).
+        let found =
+            r.push(b"$GPGGA,061759.00,9614.038,N,01131.000,E,1,08,0.9,545.4,M,46.9,M,,*69\r\n");
+        assert!(
+            matches!(&found[..], [Sentence::Invalid(why)] if why.contains("latitude 96.23")),
+            "{found:?}"
+        );
     }
 
     #[test]
