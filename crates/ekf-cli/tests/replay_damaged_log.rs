@@ -132,6 +132,22 @@ fn byte_offset(stderr: &str) -> u64 {
         .unwrap_or_else(|| panic!("no byte offset in {stderr}"))
 }
 
+/// The diagnostics statuses named `name` in the output bag `out`, in order.
+fn statuses(out: &Path, name: &str) -> Vec<ekf_cli::ros2::diagnostic_msgs::DiagnosticStatus> {
+    BagReader::open(out)
+        .expect("output bag")
+        .messages()
+        .expect("stream")
+        .map(|m| m.expect("output bag intact"))
+        .filter_map(|m| match m.decode() {
+            Ok(ekf_cli::ros2::AnyMessage::DiagnosticArray(a)) => Some(a),
+            _ => None,
+        })
+        .flat_map(|a| a.status)
+        .filter(|s| s.name == name)
+        .collect()
+}
+
 fn full_run(log: &Path) -> Vec<(String, [f64; 7])> {
     let tum = log.with_extension("tum");
     replay_json(log, &["--tum", p(&tum)]);
@@ -234,20 +250,7 @@ fn a_corrupted_chunk_is_read_past_and_the_lost_times_are_reported() {
         );
 
         // The output bag carries the same report as a diagnostics message.
-        let out_bag = BagReader::open(&out).expect("output bag");
-        let reported = out_bag
-            .messages()
-            .expect("stream")
-            .map(|m| m.expect("output bag intact"))
-            .filter(|m| m.topic() == "/ekf/diagnostics")
-            .filter_map(|m| match m.decode() {
-                Ok(ekf_cli::ros2::AnyMessage::DiagnosticArray(a)) => Some(a),
-                _ => None,
-            })
-            .flat_map(|a| a.status)
-            .filter(|s| s.name == "ekf/log")
-            .count();
-        assert_eq!(reported, 1, "chunk {k}");
+        assert_eq!(statuses(&out, "ekf/log").len(), 1, "chunk {k}");
     }
 }
 
@@ -292,18 +295,7 @@ fn an_undecodable_message_is_skipped_and_counted() {
     assert_eq!(warning["topic"], "/scan");
     assert_eq!(warning["check"], "undecodable");
     // The output bag says so on /ekf/diagnostics: an `ekf/input` status naming the check.
-    let statuses: Vec<_> = BagReader::open(&out)
-        .expect("output bag")
-        .messages()
-        .expect("stream")
-        .map(|m| m.expect("output bag intact"))
-        .filter_map(|m| match m.decode() {
-            Ok(ekf_cli::ros2::AnyMessage::DiagnosticArray(a)) => Some(a),
-            _ => None,
-        })
-        .flat_map(|a| a.status)
-        .filter(|s| s.name == "ekf/input")
-        .collect();
+    let statuses = statuses(&out, "ekf/input");
     assert_eq!(statuses.len(), 1);
     let value = |k: &str| {
         statuses[0]
@@ -325,4 +317,32 @@ fn an_undecodable_message_is_skipped_and_counted() {
     );
     let used = |s: &Value| s["lines"]["scans_used"].as_u64().expect("scans_used");
     assert_eq!(used(&summary) + 1, used(&full_summary));
+}
+
+/// The issue's case: one flipped bit in the first chunk of the bundled simulated bag,
+/// replayed from the first reference pose. It used to stop with "needs a reference pose
+/// on /ground_truth, but none was found"; now the chunk's CRC failure is reported with
+/// the times it lost, and the rest of the log replays from the first reference after it.
+#[test]
+fn a_flipped_bit_in_the_first_chunk_is_reported_as_such_and_the_rest_replays() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../testdata/sim-paper.mcap");
+    let mut bytes = std::fs::read(&src).expect("read bag");
+    bytes[20212] ^= 0x01;
+    let log = dir.path().join("flipped.mcap");
+    std::fs::write(&log, &bytes).expect("write");
+    let summary = replay_json(&log, &["--init-from-truth"]);
+    let d = &summary["damaged"][0];
+    assert!(
+        d["reason"]
+            .as_str()
+            .expect("reason")
+            .starts_with("Chunk CRC failed"),
+        "{d}"
+    );
+    assert_eq!(d["lost"]["from_ns"], 0, "{d}");
+    let rmse = summary["accuracy"]["position_rmse_m"]
+        .as_f64()
+        .expect("accuracy");
+    assert!(rmse < 0.05, "{rmse}");
 }

@@ -197,3 +197,34 @@ fn a_non_unit_quaternion_is_refused() {
         },
     );
 }
+
+/// A magnetometer compass (`MagneticField`) whose field turns nearly vertical for 10 s
+/// (a steel beam underfoot, a magnet on the robot) has no horizontal direction to give
+/// a heading: those readings are refused, not fused as the bearing of a few nanotesla.
+#[test]
+fn a_magnetic_field_without_a_horizontal_component_is_refused() {
+    use ekf_cli::ros2::geometry_msgs::Vector3;
+    use ekf_cli::ros2::sensor_msgs::MagneticField;
+    check(
+        "field vertical",
+        ("/compass", "implausible"),
+        "horizontal component",
+        |topic, t, m| {
+            let AnyMessage::Imu(imu) = &*m else { return };
+            if topic != "/compass" {
+                return;
+            }
+            // The bearing (clockwise from north) that gives the Imu's heading.
+            let bearing = std::f64::consts::FRAC_PI_2 - imu.orientation.yaw();
+            let (mut x, mut y, mut z) = (2e-5 * bearing.cos(), 2e-5 * bearing.sin(), 4e-5);
+            if (T0..T0 + 10_000_000_000).contains(&t) {
+                (x, y, z) = (0.01 * x, 0.01 * y, 5e-5);
+            }
+            *m = AnyMessage::MagneticField(MagneticField {
+                header: imu.header.clone(),
+                magnetic_field: Vector3 { x, y, z },
+                magnetic_field_covariance: [0.0; 9],
+            });
+        },
+    );
+}
