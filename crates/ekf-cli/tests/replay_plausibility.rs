@@ -228,3 +228,26 @@ fn a_magnetic_field_without_a_horizontal_component_is_refused() {
         },
     );
 }
+
+/// A `/tf_static` without the scanner's frame: the mount falls back to the
+/// configuration, and the summary says so instead of leaving it silent.
+#[test]
+fn a_tf_static_without_the_scan_frame_is_pointed_out() {
+    let dir = tempfile::tempdir().unwrap();
+    let log = dir.path().join("other_frame.mcap");
+    mutated(&testdata("sim-paper.mcap"), &log, |topic, _, m| {
+        if let (AnyMessage::TFMessage(tf), "/tf_static") = (m, topic) {
+            for t in &mut tf.transforms {
+                t.child_frame_id = "camera".into();
+            }
+        }
+    });
+    let (_, s) = run(&log);
+    assert_eq!(s.laser_mount_source, "config");
+    assert!(
+        s.notes.iter().any(|n| n
+            .contains("/tf_static has transforms, but none from base_link to the scans' frame")),
+        "{:?}",
+        s.notes
+    );
+}

@@ -135,6 +135,20 @@ impl<'a> Run<'a> {
         fusion.localizer.laser_mount = mount;
         summary.laser_mount_source = source.into();
         summary.laser_mount = [mount.x, mount.y, mount.theta];
+        if source == "config"
+            && config.laser.mount_from_tf_static
+            && !preamble.transforms.is_empty()
+        {
+            // As robot_localization warns when a transform it needs is missing: the log
+            // has static transforms, just not the one to the scanner.
+            summary.notes.push(format!(
+                "{} has transforms, but none from {} to the scans' frame {}: the laser mount \
+                 comes from localizer.laser_mount",
+                t.tf_static,
+                config.laser.base_frame,
+                preamble.scan_frame.as_deref().unwrap_or("(none)")
+            ));
+        }
 
         // Initial state.
         if options.global && options.map.is_none() {
