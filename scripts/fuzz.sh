@@ -15,6 +15,10 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 seconds=${1:-60}
+if ! [[ "$seconds" =~ ^[0-9]+$ ]]; then
+    echo "usage: scripts/fuzz.sh [SECONDS] [TARGET...] (SECONDS a whole number, got '$seconds')" >&2
+    exit 2
+fi
 [ $# -gt 0 ] && shift
 
 # The cargo-fuzz release this script was written against.
@@ -29,7 +33,12 @@ fi
 if [ $# -gt 0 ]; then
     targets=("$@")
 else
-    mapfile -t targets < <(cargo +nightly fuzz list)
+    list=$(cargo +nightly fuzz list)
+    mapfile -t targets <<<"$list"
+fi
+if [ -z "${targets[*]}" ]; then
+    echo "error: no fuzz targets found (cargo +nightly fuzz list printed nothing)" >&2
+    exit 1
 fi
 
 # One build for all targets (release with debug assertions, so overflow is a crash too).

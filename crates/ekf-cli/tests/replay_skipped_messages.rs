@@ -97,6 +97,7 @@ fn time_disorder(motion: MotionTopic, topic: &str) {
                 {
                     "topic": topic,
                     "log_time_ns": late,
+                    "check": "too_late",
                     "reason": format!(
                         "stamped {} ns, before {} ns already fused: more than [timing] \
                          max_lag late, dropped",
@@ -108,6 +109,7 @@ fn time_disorder(motion: MotionTopic, topic: &str) {
                 {
                     "topic": topic,
                     "log_time_ns": again,
+                    "check": "duplicate_stamp",
                     "reason": format!("duplicate stamp {} ns", motion_stamp(20)),
                 },
             ]),
@@ -309,7 +311,12 @@ fn nan_odometry_poses_are_skipped_and_lose_no_motion() {
     let (s, tum_bad) = run(dir.path(), "bad", &bad, "laser+compass");
     assert_eq!(
         s["warnings"],
-        json!([{"topic": "/odom", "log_time_ns": motion_stamp(10), "reason": "pose is not finite"}])
+        json!([{
+            "topic": "/odom",
+            "log_time_ns": motion_stamp(10),
+            "check": "non_finite",
+            "reason": "pose is not finite"
+        }])
     );
     for line in tum_bad.lines().skip(1) {
         assert!(!line.contains("NaN") && !line.contains("inf"), "{line}");
@@ -349,8 +356,8 @@ fn an_imu_without_orientation_is_not_fused() {
     assert_eq!(
         s["warnings"],
         json!([
-            {"topic": "/compass", "log_time_ns": compass_stamp(2), "reason": reason},
-            {"topic": "/compass", "log_time_ns": compass_stamp(4), "reason": reason},
+            {"topic": "/compass", "log_time_ns": compass_stamp(2), "check": "not_provided", "reason": reason},
+            {"topic": "/compass", "log_time_ns": compass_stamp(4), "check": "not_provided", "reason": reason},
         ])
     );
     let fused = |s: &Value| {

@@ -117,7 +117,7 @@ impl IndexedSource {
     /// that time already delivered). Returns the report of the skip, or the error that
     /// ends the stream if the reader cannot restart.
     fn skip_chunk(&mut self, data_offset: u64, at: u64, source: Arc<McapError>) -> SourceError {
-        let Some(index) = self.chunks.get(&data_offset) else {
+        let Some(index) = self.chunks.remove(&data_offset) else {
             return SourceError::Mcap { offset: at, source };
         };
         let lost = LostRange {
@@ -125,9 +125,11 @@ impl IndexedSource {
             to_ns: Some(index.message_end_time),
         };
         let start = index.chunk_start_offset;
+        // Every index entry whose data starts there (a hostile summary can list two): the
+        // reader is never asked for that data again, so a restart always makes progress.
         self.summary
             .chunk_indexes
-            .retain(|c| c.chunk_start_offset != start);
+            .retain(|c| c.compressed_data_offset().ok() != Some(data_offset));
         match reader_from(&self.summary, self.last.map(|(t, _)| t)) {
             Ok(reader) => self.reader = reader,
             Err(e) => return SourceError::mcap(start, e),

@@ -156,7 +156,6 @@ impl Failure {
 
 /// Checks the chunk record `body` (lengths, then CRC) and queues the records inside it.
 fn unpack_chunk(body: &[u8], pending: &mut VecDeque<(u8, Vec<u8>)>) -> Result<(), McapError> {
-    check_record(op::CHUNK, body)?;
     for_each_chunk_record(body, |opcode, data| {
         pending.push_back((opcode, data.to_vec()));
         Ok(())

@@ -164,8 +164,9 @@ impl Iterator for PartMessages {
 
 /// The messages of a bag: the files' streams merged by log time. Yields every message up
 /// to the end or the first damage that cannot be read past. A damaged chunk is reported
-/// where it was met ([`ReadError::SkippedChunk`]) and reading goes on after it; after
-/// any other error the stream yields nothing more.
+/// ([`ReadError::SkippedChunk`]) where it was met when the file's index is read, before
+/// the first message when the index had to be rebuilt, and reading goes on after it;
+/// after any other error the stream yields nothing more.
 pub struct Messages {
     /// Each file's stream, with the log time of the last message it delivered (where its
     /// error, if it has one, is placed in the merged order).

@@ -25,13 +25,15 @@ pub(crate) struct Raw {
     pub data: Vec<u8>,
 }
 
-/// Log times (ns) between which a skipped stretch of a file had its messages: either end
-/// unknown when no intact chunk is on that side.
+/// Log times (ns) that bound the messages of a skipped stretch of a file: the damaged
+/// chunk's own first and last message times when the file's index gives them, else the
+/// end of the intact chunk before the stretch and the start of the one after it (either
+/// unknown when there is none on that side).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
 pub struct LostRange {
-    /// The last log time known to be before the lost messages.
+    /// The earliest log time the lost messages can have.
     pub from_ns: Option<u64>,
-    /// The first log time known to be after them.
+    /// The latest.
     pub to_ns: Option<u64>,
 }
 

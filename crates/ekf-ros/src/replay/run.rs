@@ -135,10 +135,8 @@ impl<'a> Run<'a> {
         fusion.localizer.laser_mount = mount;
         summary.laser_mount_source = source.into();
         summary.laser_mount = [mount.x, mount.y, mount.theta];
-        if source == "config"
-            && config.laser.mount_from_tf_static
-            && !preamble.transforms.is_empty()
-        {
+        let tf_without_scanner = !preamble.transforms.is_empty() && preamble.scan_frame.is_some();
+        if source == "config" && config.laser.mount_from_tf_static && tf_without_scanner {
             // As robot_localization warns when a transform it needs is missing: the log
             // has static transforms, just not the one to the scanner.
             summary.notes.push(format!(
@@ -146,7 +144,7 @@ impl<'a> Run<'a> {
                  comes from localizer.laser_mount",
                 t.tf_static,
                 config.laser.base_frame,
-                preamble.scan_frame.as_deref().unwrap_or("(none)")
+                preamble.scan_frame.as_deref().unwrap_or_default()
             ));
         }
 

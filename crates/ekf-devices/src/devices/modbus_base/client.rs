@@ -152,19 +152,21 @@ impl<L: Link> BaseClient<L> {
         let deadline = Instant::now() + self.config.reply_timeout;
         let outcome = loop {
             if Instant::now() >= deadline {
-                break Err(scanner.give_up());
+                break Ok(Err(scanner.give_up()));
             }
             let mut chunk = [0u8; 256];
-            let n = self
-                .link
-                .read_some(&mut chunk)
-                .map_err(|source| self.link.io_error(DEVICE, "reading", source))?;
-            if let Some(outcome) = scanner.push(&chunk[..n]) {
-                break outcome;
+            match self.link.read_some(&mut chunk) {
+                Ok(n) => {
+                    if let Some(outcome) = scanner.push(&chunk[..n]) {
+                        break Ok(outcome);
+                    }
+                }
+                Err(source) => break Err(self.link.io_error(DEVICE, "reading", source)),
             }
         };
+        // Counted whatever ended the poll, a failed read included.
         self.counters.garbage_bytes += scanner.garbage_bytes();
         self.counters.echoes += scanner.echoes();
-        Ok(outcome)
+        outcome
     }
 }

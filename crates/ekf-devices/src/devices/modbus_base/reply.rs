@@ -161,9 +161,9 @@ fn parse_reply(request: &ModbusRequest, frame: &[u8]) -> Result<BaseReading, Pol
         .get(3..3 + want)
         .filter(|_| frame.get(2).map(|n| usize::from(*n)) == Some(want));
     let Some(data) = data else {
+        let found = frame.get(2).map_or("none".into(), |n| n.to_string());
         return Err(PollFault::Malformed(format!(
-            "byte count {:?} at byte offset 2, expected {want}",
-            frame.get(2)
+            "byte count {found} at byte offset 2, expected {want}"
         )));
     };
     let mut registers = [0u16; REGISTER_COUNT as usize];

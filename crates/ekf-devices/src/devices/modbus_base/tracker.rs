@@ -14,6 +14,10 @@ pub struct WheelTicks {
     pub right: i64,
 }
 
+/// Most polls a host makes per second; bounds the sample counter's step across an outage
+/// of a controller that ran on (`ekf live` polls at 10 Hz).
+const MAX_POLLS_PER_S: f64 = 100.0;
+
 /// Follows the encoder counts across reads.
 #[derive(Debug, Clone)]
 pub struct EncoderTracker {
@@ -76,8 +80,8 @@ impl EncoderTracker {
     /// outage, kept ([`Self::outages_bridged`]); otherwise the controller restarted, and
     /// the read is a new reference with no motion ([`Self::restarts`]).
     pub fn update(&mut self, reading: BaseReading, t_ns: u64) -> Option<WheelTicks> {
-        let reconnected = std::mem::take(&mut self.reconnected);
         let Some((last, last_ns)) = self.last else {
+            self.reconnected = false;
             self.last = Some((reading, t_ns));
             return Some(self.totals);
         };
@@ -86,12 +90,20 @@ impl EncoderTracker {
             self.repeated += 1;
             return None;
         }
+        // A repeated sample says nothing about the reconnection: the next new one does.
+        let reconnected = std::mem::take(&mut self.reconnected);
+        let elapsed_s = t_ns.saturating_sub(last_ns) as f64 * 1e-9;
+        // A controller that ran on latched at most one sample per poll meanwhile; one
+        // that restarted counts from 1, which reads as a jump of up to 2¹⁵ from an old
+        // counter past 2¹⁵.
+        let ran_on = f64::from(jump) <= 1.0 + MAX_POLLS_PER_S * elapsed_s;
         let left = i64::from(reading.left_ticks.wrapping_sub(last.left_ticks) as i32);
         let right = i64::from(reading.right_ticks.wrapping_sub(last.right_ticks) as i32);
         // One tick of slack each way: the counts are whole ticks.
         let possible = self.max_ticks_per_s * t_ns.saturating_sub(last_ns) as f64 * 1e-9 + 2.0;
         self.last = Some((reading, t_ns));
-        if jump >= 0x8000 || left.abs() as f64 > possible || right.abs() as f64 > possible {
+        let wheels_can = left.abs() as f64 <= possible && right.abs() as f64 <= possible;
+        if jump >= 0x8000 || !wheels_can || (reconnected && !ran_on) {
             if reconnected {
                 self.restarts += 1;
                 return Some(self.totals);
@@ -202,6 +214,19 @@ mod tests {
             })
         );
         assert_eq!((t.outages_bridged, t.restarts, t.implausible), (1, 1, 2));
+        // A power cycle from a counter past 2¹⁵ reads as a forward step of less than 2¹⁵,
+        // but far more than the polls of 0.1 s: a restart, even with counts the wheels
+        // could have made.
+        let mut u = EncoderTracker::new(1000.0);
+        u.update(read(50, 50, 40_000), 0);
+        u.reconnected();
+        // A repeat of the last sample first: it does not use up the reconnection.
+        assert_eq!(u.update(read(50, 50, 40_000), S / 20), None);
+        assert_eq!(
+            u.update(read(20, 20, 1), S / 10),
+            Some(WheelTicks { left: 0, right: 0 })
+        );
+        assert_eq!((u.outages_bridged, u.restarts, u.repeated), (0, 1, 1));
         // The restarted controller is the reference now.
         assert_eq!(
             t.update(read(12, 3, 2), 21 * S / 10),
