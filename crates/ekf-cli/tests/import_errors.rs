@@ -75,6 +75,26 @@ fn nan_and_infinity_are_rejected() {
     );
 }
 
+/// A negative reading is no range a scanner measures: read as no return (NaN), the scan
+/// kept, and its line counted for the import summary.
+#[test]
+fn a_negative_range_is_no_return_and_counted_with_its_line() {
+    let text = format!("{GOOD_ODOM}FLASER 3 1.0 -2.5 3.0 0 0 0 0 0 0 8.0 host 8.0\n");
+    let mut reader = read_carmen(text.as_bytes(), CarmenOptions::default());
+    let records: Vec<ImportRecord> = reader.by_ref().map(Result::unwrap).collect();
+    let ranges = records
+        .iter()
+        .find_map(|r| match r {
+            ImportRecord::Scan(s) => Some(s.ranges.clone()),
+            _ => None,
+        })
+        .expect("the scan is kept");
+    assert_eq!((ranges[0], ranges[2]), (1.0, 3.0));
+    assert!(ranges[1].is_nan());
+    let counted = &reader.stats().invalid_ranges;
+    assert_eq!((counted.count, counted.first_lines.clone()), (1, vec![2]));
+}
+
 #[test]
 fn bad_timestamp_and_count_are_named() {
     let (_, e) = carmen_until_error(b"ODOM 1 2 3 0 0 0 4s h 1\n");

@@ -91,6 +91,7 @@ fn corrected_carmen_rechains_odometry_and_yields_references() {
             backwards_time: 0,
             time_repairs: TimeRepairs::default(),
             duplicates: RepairCount::default(),
+            invalid_ranges: RepairCount::default(),
             laser_range_max: Some(RangeMax {
                 value: 4.0,
                 source: RangeMaxSource::Param,

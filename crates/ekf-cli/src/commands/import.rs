@@ -281,6 +281,13 @@ pub fn repair_lines(stats: &ImportStats) -> Vec<String> {
             where_found(&stats.duplicates)
         ));
     }
+    if stats.invalid_ranges.count > 0 {
+        lines.push(format!(
+            "{} scans with negative ranges, read as no return ({})",
+            stats.invalid_ranges.count,
+            where_found(&stats.invalid_ranges)
+        ));
+    }
     lines
 }
 

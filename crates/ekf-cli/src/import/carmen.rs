@@ -234,7 +234,8 @@ impl CarmenParser {
         let n = f.count(2, "num_readings")?;
         let context = format!("declares {n} readings");
         f.expect_declared_len(n.saturating_add(11), &context)?;
-        let ranges = f.ranges(3, n)?;
+        let mut ranges = f.ranges(3, n)?;
+        no_return_for_negative(&mut ranges, f.line(), out);
         let robot = f.pose(n + 3, ["x", "y", "theta"])?;
         f.pose(n + 6, ["odom_x", "odom_y", "odom_theta"])?;
         let raw_stamp = f.stamp(n + 9, "timestamp")?;
@@ -271,7 +272,8 @@ impl CarmenParser {
         let m = f.count(m_field, "num_remissions")?;
         let context = format!("declares {n} readings and {m} remissions");
         f.expect_declared_len(n.saturating_add(m).saturating_add(24), &context)?;
-        let ranges = f.ranges(10, n)?;
+        let mut ranges = f.ranges(10, n)?;
+        no_return_for_negative(&mut ranges, f.line(), out);
         for field in m_field + 1..=m_field + m {
             f.f64(field, "remission")?;
         }
@@ -447,5 +449,18 @@ impl LineParser for CarmenParser {
         self.close_probe(out)?;
         self.clock.finish(out);
         Ok(())
+    }
+}
+
+/// Negative readings (no scanner measures them: a logging bug or a corrupted field)
+/// become NaN, no return, and the scan's line is counted.
+fn no_return_for_negative(ranges: &mut [f32], line: u64, out: &mut Output) {
+    let mut found = false;
+    for r in ranges.iter_mut().filter(|r| **r < 0.0) {
+        *r = f32::NAN;
+        found = true;
+    }
+    if found {
+        out.stats.invalid_ranges.add(line);
     }
 }

@@ -28,6 +28,10 @@ pub struct ImportStats {
     pub time_repairs: TimeRepairs,
     /// Records left out because they repeat the record before them exactly (CARMEN).
     pub duplicates: RepairCount,
+    /// Scans with negative range readings, which no scanner measures: those readings are
+    /// written as NaN (no return, as `sensor_msgs/LaserScan` has it). Non-finite ones are
+    /// errors naming the field.
+    pub invalid_ranges: RepairCount,
     /// The range at and beyond which `FLASER` readings are no return (m), and where it came
     /// from; `None` before the first scan.
     pub laser_range_max: Option<RangeMax>,
