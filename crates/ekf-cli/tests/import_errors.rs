@@ -75,6 +75,42 @@ fn nan_and_infinity_are_rejected() {
     );
 }
 
+/// A log appended to itself (`cat log.gz log.gz`: two gzip members) starts over at its
+/// first stamp: the first copy is imported, and the error names the line where the
+/// second begins; one stray stamp back at the start is only a repaired stamp.
+#[test]
+fn a_log_that_starts_over_is_imported_up_to_the_restart() {
+    let copy: String = (0..30)
+        .map(|i| {
+            format!(
+                "ODOM {i} 0 0 0 0 0 {t} host {t}\n",
+                t = 100.0 + 0.1 * f64::from(i)
+            )
+        })
+        .collect();
+    let (records, e) = carmen_until_error(format!("{copy}{copy}").as_bytes());
+    assert_eq!(records.len(), 30);
+    assert_eq!(
+        e,
+        "line 31: the log starts over: from here the stamps run again from 100.000 s, back \
+         at the first record's 100.000 s after 2.9 s of log (a second copy appended, e.g. a \
+         second gzip member?); the records before line 31 are imported, the rest is not"
+    );
+    // A stray stamp back at the start, then the log goes on: repaired, not a restart.
+    let later: String = (30..60)
+        .map(|i| {
+            format!(
+                "ODOM {i} 0 0 0 0 0 {t} host {t}\n",
+                t = 100.0 + 0.1 * f64::from(i)
+            )
+        })
+        .collect();
+    let text = format!("{copy}ODOM 9 0 0 0 0 0 100.0 host 100.0\n{later}");
+    let mut reader = read_carmen(text.as_bytes(), CarmenOptions::default());
+    assert_eq!(reader.by_ref().map(Result::unwrap).count(), 61);
+    assert_eq!(reader.stats().time_repairs.backwards.count, 1);
+}
+
 /// A negative reading is no range a scanner measures: read as no return (NaN), the scan
 /// kept, and its line counted for the import summary.
 #[test]

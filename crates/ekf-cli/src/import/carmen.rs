@@ -31,6 +31,15 @@
 //! in [`ImportStats::time_repairs`](super::ImportStats::time_repairs), and
 //! [`CarmenOptions::strict`] refuses such a log instead. Exact repeats of the `ODOM` line
 //! before are left out and counted in [`ImportStats::duplicates`](super::ImportStats).
+//! A log whose stamps return to its first one and run on from there
+//! ([`RESTART_RECORDS`](super::RESTART_RECORDS) of them) is a second copy appended
+//! to the first (`cat log.gz log.gz`, two gzip members): the first copy is imported and
+//! [`ImportError::StartsOver`](super::ImportError::StartsOver) names the line.
+//!
+//! # Ranges
+//!
+//! A negative reading, which no scanner measures, is written as NaN (no return) and its
+//! scan counted in [`ImportStats::invalid_ranges`](super::ImportStats).
 //!
 //! # The "corrected" flavour
 //!

@@ -169,7 +169,20 @@ pub(crate) struct ClockRepair {
     placed: u64,
     /// The last record placed with a stamp of its own was odometry (broken mode).
     after_odometry: bool,
+    /// The first good stamp (trusted mode).
+    first_ns: Option<u64>,
+    /// A run of increasing stamps earlier than the anchor that began at the log's first
+    /// stamp: (its first line, its first stamp, its last stamp, its length).
+    restart: Option<(u64, u64, u64, usize)>,
 }
+
+/// Increasing stamps in a row, earlier than the last good one and beginning within a
+/// second of the log's first stamp, that show the log starting over (one stray stamp
+/// back at the start does not).
+pub const RESTART_RECORDS: usize = 20;
+
+/// How close to the log's first stamp a run must begin to be the log starting over.
+const RESTART_TOLERANCE_NS: u64 = 1_000_000_000;
 
 impl ClockRepair {
     /// A repair that has not judged the clock yet; `strict` makes a bad stamp an error.
@@ -182,6 +195,8 @@ impl ClockRepair {
             last_ns: 0,
             placed: 0,
             after_odometry: false,
+            first_ns: None,
+            restart: None,
         }
     }
 
@@ -256,10 +271,15 @@ impl ClockRepair {
             RawStamp::Valid(ns) if self.anchor_ns.is_none_or(|a| ns >= a) => {
                 self.release_until(ns, out);
                 self.anchor_ns = Some(ns);
+                self.first_ns.get_or_insert(ns);
+                self.restart = None;
                 self.emit(entry.record, ns, out);
                 return Ok(());
             }
-            RawStamp::Valid(_) => "earlier than the stamp before it",
+            RawStamp::Valid(ns) => {
+                self.follow_restart(entry.line, ns)?;
+                "earlier than the stamp before it"
+            }
             RawStamp::Zero => "zero",
             RawStamp::Denormal => "below one nanosecond",
             RawStamp::Negative => "negative",
@@ -286,6 +306,34 @@ impl ClockRepair {
             self.release_after_anchor(out);
         }
         Ok(())
+    }
+
+    /// Follows a stamp `ns` (line `line`) earlier than the anchor: [`RESTART_RECORDS`]
+    /// of them in a row, increasing from within [`RESTART_TOLERANCE_NS`] of the first
+    /// stamp, are the log starting over, an error naming where.
+    fn follow_restart(&mut self, line: u64, ns: u64) -> Result<(), ImportError> {
+        let (Some(first), Some(anchor)) = (self.first_ns, self.anchor_ns) else {
+            return Ok(());
+        };
+        self.restart = match self.restart {
+            Some((start_line, start_ns, last, n)) if ns >= last => {
+                Some((start_line, start_ns, ns, n + 1))
+            }
+            _ if ns <= first.saturating_add(RESTART_TOLERANCE_NS) => Some((line, ns, ns, 1)),
+            _ => None,
+        };
+        match self.restart {
+            Some((start_line, start_ns, _, n)) if n >= RESTART_RECORDS => {
+                let s = |t: u64| t as f64 * 1e-9;
+                Err(ImportError::StartsOver {
+                    line: start_line,
+                    stamp_s: s(start_ns),
+                    first_s: s(first),
+                    span_s: s(anchor - first),
+                })
+            }
+            _ => Ok(()),
+        }
     }
 
     /// Spreads the waiting records evenly between the anchor and the good stamp `b_ns`.

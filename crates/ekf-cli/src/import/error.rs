@@ -99,4 +99,30 @@ pub enum ImportError {
         /// Consecutive pairs of positive stamps.
         pairs: usize,
     },
+    /// The log's clock returns to its first stamp and runs on from there: a second copy
+    /// of the log appended to the first (two gzip members, a log concatenated twice).
+    #[error(
+        "line {line}: the log starts over: from here the stamps run again from {stamp_s:.3} s, \
+         back at the first record's {first_s:.3} s after {span_s:.1} s of log (a second \
+         copy appended, e.g. a second gzip member?); the records before line {line} are \
+         imported, the rest is not"
+    )]
+    StartsOver {
+        /// 1-based line number where the log starts over.
+        line: u64,
+        /// The stamp there (s).
+        stamp_s: f64,
+        /// The log's first stamp (s).
+        first_s: f64,
+        /// How far the log had run before (s).
+        span_s: f64,
+    },
+}
+
+impl ImportError {
+    /// Whether the error marks where the log ends rather than a fault in it: the records
+    /// placed before it are imported ([`ImportError::StartsOver`]).
+    pub fn ends_the_log(&self) -> bool {
+        matches!(self, ImportError::StartsOver { .. })
+    }
 }

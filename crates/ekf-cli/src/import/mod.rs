@@ -42,7 +42,7 @@ mod stats;
 mod stream;
 
 pub use carmen::{read_carmen, CarmenFlavour, CarmenOptions, CarmenReader};
-pub use clock::{RepairCount, TimeRepairs, PROBE_RECORDS, SYNTHETIC_STEP_NS};
+pub use clock::{RepairCount, TimeRepairs, PROBE_RECORDS, RESTART_RECORDS, SYNTHETIC_STEP_NS};
 pub use compass::SyntheticCompass;
 pub use error::ImportError;
 pub use lines::MAX_LINE_BYTES;

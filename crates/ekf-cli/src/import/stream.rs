@@ -85,7 +85,9 @@ impl<R: BufRead, P: LineParser> Iterator for RecordStream<R, P> {
             };
             if let Err(e) = step {
                 self.done = true;
-                if !self.out.queue.is_empty() {
+                if e.ends_the_log() {
+                    // Everything placed before the point where the log ends is kept.
+                } else if !self.out.queue.is_empty() {
                     // Records the failing line released (a strict clock) go with it.
                     self.out.queue.clear();
                 } else if self.parser.finish(&mut self.out).is_err() {
