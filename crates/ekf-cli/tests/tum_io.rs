@@ -145,3 +145,26 @@ proptest! {
         }
     }
 }
+
+/// The tum_trajectory fuzz target's find (fuzz/regressions/tum_trajectory/): a
+/// quaternion component of 1.482e305 overflowed the squares of the yaw formula, and the
+/// row was read with a NaN heading (written back as NaN, which does not read). The yaw is
+/// now computed on the components scaled by the largest, and a (near) zero quaternion is
+/// refused with its line.
+#[test]
+fn huge_quaternions_give_their_yaw_and_tiny_ones_are_refused() {
+    let t = read("1 0 0 0 0 0 0 1482E302\n2 0 0 0 0 0 1e300 1e300\n").unwrap();
+    assert_eq!(t.samples[0].pose.theta, 0.0);
+    assert!((t.samples[1].pose.theta - PI / 2.0).abs() < 1e-12);
+    let mut written = Vec::new();
+    write_tum(&mut written, &t).unwrap();
+    let again = read(std::str::from_utf8(&written).unwrap()).unwrap();
+    assert_eq!(again.samples.len(), 2);
+    assert_eq!(
+        read("# tiny\n1 0 0 0 1e-9 0 0 1e-9\n")
+            .unwrap_err()
+            .to_string(),
+        "test.txt:2: columns 5-8 (qx qy qz qw) are zero or nearly so (none above 1e-6), \
+         expected a unit quaternion"
+    );
+}

@@ -66,7 +66,10 @@ pub enum TumError {
         expected: &'static str,
     },
     /// The orientation `(qx, qy, qz, qw)` is the zero quaternion, which has no heading.
-    #[error("{label}:{line}: columns 5-8 (qx qy qz qw) are all zero, expected a unit quaternion")]
+    #[error(
+        "{label}:{line}: columns 5-8 (qx qy qz qw) are zero or nearly so (none above 1e-6), \
+         expected a unit quaternion"
+    )]
     ZeroQuaternion {
         /// The file.
         label: String,
@@ -197,12 +200,6 @@ fn parse_line(text: &str, label: &str, line: usize) -> Result<(u64, Pose2<f64>),
             .ok_or_else(|| field_error(column + 1, NUMBER_EXPECTED))?;
     }
     let [x, y, _z, qx, qy, qz, qw] = values;
-    if qx == 0.0 && qy == 0.0 && qz == 0.0 && qw == 0.0 {
-        return Err(TumError::ZeroQuaternion {
-            label: label.to_owned(),
-            line,
-        });
-    }
     let yaw = Quaternion {
         x: qx,
         y: qy,
@@ -210,6 +207,13 @@ fn parse_line(text: &str, label: &str, line: usize) -> Result<(u64, Pose2<f64>),
         w: qw,
     }
     .yaw();
+    // The components are finite, so only a (near) zero quaternion has no yaw.
+    if !yaw.is_finite() {
+        return Err(TumError::ZeroQuaternion {
+            label: label.to_owned(),
+            line,
+        });
+    }
     Ok((t_ns, Pose2::new(x, y, yaw)))
 }
 

@@ -63,14 +63,27 @@ impl Quaternion {
 
     /// The yaw (rad, counter-clockwise about z, in (−π, π]) of this orientation (ZYX
     /// order), `atan2(2(wz + xy), w² + x² − y² − z²)`: right for quaternions that are not
-    /// exactly unit length too. NaN for a quaternion of (near) zero norm, which is no
-    /// orientation at all (callers refuse non-finite yaws).
+    /// exactly unit length too, since the ratio does not change with the scale. It is
+    /// computed on the components divided by the largest of them, so that one of 1e300
+    /// does not overflow the squares. NaN for a quaternion with a non-finite component or
+    /// of (near) zero norm (largest component at most 1e-6), which is no orientation at
+    /// all (callers refuse non-finite yaws).
     pub fn yaw(&self) -> f64 {
-        let (w, x, y, z) = (self.w, self.x, self.y, self.z);
-        let norm2 = w * w + x * x + y * y + z * z;
-        if !norm2.is_finite() || norm2 <= 1e-12 {
+        let largest = [self.w, self.x, self.y, self.z]
+            .iter()
+            .fold(0.0_f64, |m, c| m.max(c.abs()));
+        let finite = [self.w, self.x, self.y, self.z]
+            .iter()
+            .all(|c| c.is_finite());
+        if !finite || largest <= 1e-6 {
             return f64::NAN;
         }
+        let (w, x, y, z) = (
+            self.w / largest,
+            self.x / largest,
+            self.y / largest,
+            self.z / largest,
+        );
         (2.0 * (w * z + x * y)).atan2(w * w + x * x - y * y - z * z)
     }
 }
