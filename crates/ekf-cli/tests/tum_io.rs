@@ -164,7 +164,7 @@ fn huge_quaternions_give_their_yaw_and_tiny_ones_are_refused() {
         read("# tiny\n1 0 0 0 1e-9 0 0 1e-9\n")
             .unwrap_err()
             .to_string(),
-        "test.txt:2: columns 5-8 (qx qy qz qw) are zero or nearly so (none above 1e-6), \
+        "test.txt:2: columns 5-8 (qx qy qz qw) are zero or nearly so (norm at most 1e-6), \
          expected a unit quaternion"
     );
 }

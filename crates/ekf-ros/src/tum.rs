@@ -67,7 +67,7 @@ pub enum TumError {
     },
     /// The orientation `(qx, qy, qz, qw)` is the zero quaternion, which has no heading.
     #[error(
-        "{label}:{line}: columns 5-8 (qx qy qz qw) are zero or nearly so (none above 1e-6), \
+        "{label}:{line}: columns 5-8 (qx qy qz qw) are zero or nearly so (norm at most 1e-6), \
          expected a unit quaternion"
     )]
     ZeroQuaternion {

@@ -63,27 +63,25 @@ impl Quaternion {
 
     /// The yaw (rad, counter-clockwise about z, in (−π, π]) of this orientation (ZYX
     /// order), `atan2(2(wz + xy), w² + x² − y² − z²)`: right for quaternions that are not
-    /// exactly unit length too, since the ratio does not change with the scale. It is
-    /// computed on the components divided by the largest of them, so that one of 1e300
-    /// does not overflow the squares. NaN for a quaternion with a non-finite component or
-    /// of (near) zero norm (largest component at most 1e-6), which is no orientation at
-    /// all (callers refuse non-finite yaws).
+    /// exactly unit length too, since the ratio does not change with the scale. Components
+    /// so large that their squares overflow (1e300) are divided by the largest first. NaN
+    /// for a quaternion with a non-finite component or of (near) zero norm, which is no
+    /// orientation at all (callers refuse non-finite yaws).
     pub fn yaw(&self) -> f64 {
-        let largest = [self.w, self.x, self.y, self.z]
-            .iter()
-            .fold(0.0_f64, |m, c| m.max(c.abs()));
-        let finite = [self.w, self.x, self.y, self.z]
-            .iter()
-            .all(|c| c.is_finite());
-        if !finite || largest <= 1e-6 {
+        let q = [self.w, self.x, self.y, self.z];
+        if !q.iter().all(|c| c.is_finite()) {
             return f64::NAN;
         }
-        let (w, x, y, z) = (
-            self.w / largest,
-            self.x / largest,
-            self.y / largest,
-            self.z / largest,
-        );
+        let norm2: f64 = q.iter().map(|c| c * c).sum();
+        let scale = if norm2.is_finite() {
+            1.0
+        } else {
+            q.iter().fold(0.0_f64, |m, c| m.max(c.abs()))
+        };
+        if norm2 <= 1e-12 {
+            return f64::NAN;
+        }
+        let [w, x, y, z] = q.map(|c| c / scale);
         (2.0 * (w * z + x * y)).atan2(w * w + x * x - y * y - z * z)
     }
 }
