@@ -402,11 +402,19 @@ pub struct MapBuildArgs {
     #[arg(long)]
     pub out: PathBuf,
     /// Place every scan at the reference pose and fuse repeated sightings of a wall.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "slam")]
     pub from_truth: bool,
+    /// Build the map without a reference (SLAM): localize in the map as it grows, close
+    /// loops where the robot comes back, optimise the key scans' pose graph, and fuse
+    /// every key scan's lines at its corrected pose. The reference topic is not read.
+    #[arg(long)]
+    pub slam: bool,
+    /// With --slam: write the corrected trajectory (a pose per scan) as TUM.
+    #[arg(long, requires = "slam")]
+    pub tum: Option<PathBuf>,
     /// With a first-scan map: place the scan at the first reference pose instead of
     /// the configured initial pose.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "slam")]
     pub init_from_truth: bool,
     /// Configuration file (TOML): topics, laser mount, extraction parameters.
     #[arg(long)]

@@ -322,6 +322,9 @@ fn write_map(map: &lrf_lines::LineMap, path: &Path) -> Outcome {
 
 fn map_build_command(a: MapBuildArgs) -> Outcome {
     let config = load_config(a.config.as_deref())?;
+    if a.slam {
+        return map_build_slam(&a, &config);
+    }
     let source = if a.from_truth {
         map::MapSource::Reference(Default::default())
     } else {
@@ -336,6 +339,37 @@ fn map_build_command(a: MapBuildArgs) -> Outcome {
         a.json,
         format_args!("{}: {summary}", a.out.display()),
     )
+}
+
+/// `ekf map build --slam`: the map, the corrected trajectory, the summary; what came
+/// before a damaged part of the log is written before the error is reported.
+fn map_build_slam(a: &MapBuildArgs, config: &ekf_ros::config::Config) -> Outcome {
+    let bar = progress_bar();
+    let mut progress = |done: u64, total: u64| {
+        if let Some(b) = &bar {
+            b.set_length(total);
+            b.set_position(done);
+        }
+    };
+    let outcome = ekf_ros::slam::build_slam_map(&a.log, config, &mut progress)?;
+    if let Some(b) = bar {
+        b.finish_and_clear();
+    }
+    write_map(&outcome.map, &a.out)?;
+    if let Some(path) = &a.tum {
+        create_parent(path)?;
+        ekf_ros::tum::write_tum_file(path, &outcome.trajectory)?;
+    }
+    let summary = &outcome.summary;
+    print_result(
+        summary,
+        a.json,
+        format_args!("{}: {summary}", a.out.display()),
+    )?;
+    match outcome.failure {
+        Some(failure) => Err(failure.into()),
+        None => Ok(()),
+    }
 }
 
 fn map_import_grid_command(a: MapImportGridArgs) -> Outcome {

@@ -181,6 +181,13 @@ impl Fuser {
         &self.localizer
     }
 
+    /// The filter, to change its map or restart it at a corrected pose between inputs
+    /// (a map that grows, a loop closure). The tracking monitor is not told: use it with
+    /// tracking off, or where a change of map or pose is not a loss or a recovery.
+    pub fn localizer_mut(&mut self) -> &mut Localizer {
+        &mut self.localizer
+    }
+
     /// What has been fused, counted.
     pub fn counts(&self) -> &FusionCounts {
         &self.counts

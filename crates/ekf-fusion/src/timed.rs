@@ -61,6 +61,11 @@ impl<T> TimedLocalizer<T> {
         &self.fuser
     }
 
+    /// The fuser, to change its filter between inputs ([`Fuser::localizer_mut`]).
+    pub fn fuser_mut(&mut self) -> &mut Fuser {
+        &mut self.fuser
+    }
+
     /// Takes an input stamped `stamp_ns`. One stamped before an input already fused is
     /// refused and counted: more than the lag late.
     pub fn push(&mut self, stamp_ns: u64, input: Input, tag: T) -> Result<(), TooLate<(Input, T)>> {

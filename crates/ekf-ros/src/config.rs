@@ -80,6 +80,8 @@ pub struct Config {
     pub gps: GpsConfig,
     /// How late a measurement may be and still be fused at its stamp.
     pub timing: TimingConfig,
+    /// `ekf map build --slam`: key scans, loop closures, the pose graph.
+    pub slam: crate::slam::SlamParams,
 }
 
 /// Measurements fused at their own stamps ([`ekf_fusion::TimedLocalizer`]): replay holds
@@ -335,6 +337,7 @@ impl Config {
                 .validate()
                 .map_err(|e| e.in_table("compass_calibration")),
             self.devices.validate().map_err(|e| e.in_table("devices")),
+            self.slam.validate().map_err(|e| e.in_table("slam")),
         ];
         for result in sections {
             result.map_err(setting)?;

@@ -18,6 +18,7 @@ pub mod mcap_io;
 pub mod output_dir;
 pub mod replay;
 pub mod ros2;
+pub mod slam;
 pub mod trajectory;
 pub mod tum;
 

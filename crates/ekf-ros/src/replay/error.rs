@@ -96,6 +96,9 @@ pub enum ReplayError {
         /// What the OS said.
         source: std::io::Error,
     },
+    /// The SLAM pose graph could not be built or solved.
+    #[error("map build --slam: {0}")]
+    Slam(String),
 }
 
 impl From<FusionError> for ReplayError {

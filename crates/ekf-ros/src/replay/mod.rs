@@ -13,6 +13,7 @@
 pub mod accuracy;
 mod error;
 pub mod events;
+mod hook;
 pub mod inputs;
 pub mod outputs;
 mod run;
@@ -21,6 +22,7 @@ pub mod stamps;
 pub mod summary;
 
 pub use error::ReplayError;
+pub use hook::ScanHook;
 pub use run::Run;
 
 use crate::config::{Config, MotionSource};
@@ -108,6 +110,17 @@ pub fn replay(
     log: &Path,
     config: &Config,
     options: &ReplayOptions,
+    progress: &mut dyn FnMut(u64, u64),
+) -> Result<ReplayOutcome, ReplayError> {
+    replay_with(log, config, options, None, progress)
+}
+
+/// [`replay`], handing every fused scan to `hook` when there is one ([`ScanHook`]).
+pub fn replay_with(
+    log: &Path,
+    config: &Config,
+    options: &ReplayOptions,
+    hook: Option<&mut dyn ScanHook>,
     progress: &mut dyn FnMut(u64, u64),
 ) -> Result<ReplayOutcome, ReplayError> {
     let started = Instant::now();
@@ -209,6 +222,9 @@ pub fn replay(
         motion_topic,
         (config.timing.max_lag * 1e9) as u64,
     )?;
+    if let Some(hook) = hook {
+        run = run.with_hook(hook);
+    }
     if topic_type(&t.ground_truth).is_none() {
         // A log without a reference is normal; one whose reference is under another name
         // would silently report no accuracy.

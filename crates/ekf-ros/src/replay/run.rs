@@ -8,7 +8,7 @@ use super::inputs::{
 use super::outputs::OutputBag;
 use super::summary::{self, ReplaySummary};
 use super::{laser_mount, load_map, reference_pose, sink, stamps};
-use super::{Preamble, ReplayError, ReplayOptions, ReplayOutcome};
+use super::{Preamble, ReplayError, ReplayOptions, ReplayOutcome, ScanHook};
 use crate::config::Config;
 use crate::mcap_io::{BagMessage, ChannelInfo, ReadError};
 use crate::ros2::diagnostic_msgs::DiagnosticStatus;
@@ -106,6 +106,8 @@ pub struct Run<'a> {
     events: Option<events::EventLog>,
     /// Log time of the last `ekf/input` diagnostics written per check.
     flagged_at: HashMap<&'static str, u64>,
+    /// What each fused scan is handed to, if anything.
+    hook: Option<&'a mut dyn ScanHook>,
 }
 
 impl<'a> Run<'a> {
@@ -207,6 +209,7 @@ impl<'a> Run<'a> {
             compass_not_following: 0,
             events: options.keep_trajectories.then(events::EventLog::default),
             flagged_at: HashMap::new(),
+            hook: None,
         };
         if let Some(out) = run.out.as_mut() {
             if options.map.is_some() {
@@ -215,6 +218,12 @@ impl<'a> Run<'a> {
             }
         }
         Ok(run)
+    }
+
+    /// Hands every fused scan to `hook` ([`ScanHook`]) from now on.
+    pub fn with_hook(mut self, hook: &'a mut dyn ScanHook) -> Self {
+        self.hook = Some(hook);
+        self
     }
 
     /// The time-ordered localizer's fuser: the filter, its map and the counts.
@@ -692,6 +701,11 @@ impl<'a> Run<'a> {
             let localizer = self.localizer.fuser().localizer();
             write_scan_outputs(out, now, fused, localizer, &mut self.map_written)?;
         }
+        if let Some(hook) = self.hook.as_mut() {
+            if hook.scan_fused(now, fused, self.localizer.fuser_mut())? {
+                self.map_written = false;
+            }
+        }
         self.record_pose(now)
     }
 
@@ -799,7 +813,8 @@ fn write_scan_outputs(
         )?;
     }
     let report = fused.report;
-    if report.map_built && !*map_written {
+    // The first-scan map once built, a map a hook replaced at the scan after.
+    if !*map_written && !localizer.map().is_empty() {
         out.map(now, localizer.map())?;
         *map_written = true;
     }

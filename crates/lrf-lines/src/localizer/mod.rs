@@ -567,6 +567,35 @@ impl Localizer {
             report.map_built = true;
             return Ok(report);
         }
+        self.match_and_fuse(report, clock)
+    }
+
+    /// The laser step for lines already extracted (sensor frame, as
+    /// [`last_lines`](Self::last_lines) gives them): match at the current state and fuse,
+    /// as [`update_scan`](Self::update_scan) does after its extraction. A loop-closure
+    /// check refines a pose this way against a part of a map. Fails, leaving the filter as
+    /// it was, on a line that is not finite or whose covariance is not positive definite.
+    pub fn update_lines(&mut self, lines: &[ObservedLine]) -> Result<ScanReport, LocalizerError> {
+        for line in lines {
+            crate::matching::validate_observed(line).map_err(LocalizerError::Filter)?;
+        }
+        self.fusions.clear();
+        self.lines.clear();
+        self.lines.extend_from_slice(lines);
+        let report = ScanReport {
+            extracted: lines.len(),
+            ..ScanReport::default()
+        };
+        self.match_and_fuse(report, &mut ())
+    }
+
+    /// Matches [`last_lines`](Self::last_lines) against the map at the predicted state
+    /// and fuses the matches (steps 2 and 3 of a scan update).
+    fn match_and_fuse(
+        &mut self,
+        mut report: ScanReport,
+        clock: &mut impl StageClock,
+    ) -> Result<ScanReport, LocalizerError> {
         self.matcher.match_lines_with(
             &self.lines,
             &self.map,
@@ -687,6 +716,17 @@ impl Localizer {
             poses,
             params,
         )
+    }
+
+    /// Replaces the map (a map that grows, or a corrected one) and keeps the filter's
+    /// state. The new map is a given map: a first-scan map's error model, which belongs to
+    /// the walls it was built with, is dropped, and no scan builds a map any more.
+    pub fn replace_map(&mut self, map: LineMap) {
+        self.map = map;
+        self.map_errors = MapErrors::default();
+        self.build_map_from_next_scan = false;
+        self.map_from_first_scan = false;
+        self.clear_matches();
     }
 
     /// Restarts the filter at `pose` with `covariance` (after a relocalization): the

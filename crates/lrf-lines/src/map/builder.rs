@@ -4,6 +4,7 @@
 use super::wall_index::WallIndex;
 use super::{interval_along, point_on_line, LineMap, MapSegment};
 use crate::matching::{non_negative_params, validate_observed};
+use crate::observed::normalized;
 use crate::ObservedLine;
 use alloc::vec::Vec;
 use ekf_core::{angle_diff, wrap_angle, ChiSquareGate, Error, Line, Pose2};
@@ -266,13 +267,10 @@ fn tolerance_at(tolerance: &Matrix2<f64>, t: f64) -> Matrix2<f64> {
 
 /// One observed line as a wall in the world frame, or `None` if it has zero length.
 fn sighting(observed: &ObservedLine, sensor: &Pose2<f64>) -> Option<Wall> {
-    let beta = wrap_angle(observed.line.beta + sensor.theta);
-    let (s, c) = (libm::sin(beta), libm::cos(beta));
-    let rho = observed.line.rho + sensor.x * c + sensor.y * s;
-    let j = Matrix2::new(1.0, -sensor.x * s + sensor.y * c, 0.0, 1.0);
-    let (line, covariance) = normalized(rho, beta, j * observed.covariance * j.transpose());
-    let start = line.project(&sensor.transform_point(&observed.start));
-    let end = line.project(&sensor.transform_point(&observed.end));
+    let seen = observed.seen_from(sensor);
+    let (line, covariance) = (seen.line, seen.covariance);
+    let start = line.project(&seen.start);
+    let end = line.project(&seen.end);
     ((end - start).norm() > 0.0).then_some(Wall {
         line,
         covariance,
@@ -280,29 +278,6 @@ fn sighting(observed: &ObservedLine, sensor: &Pose2<f64>) -> Option<Wall> {
         end,
         sightings: 1,
     })
-}
-
-/// `(ρ, β)` with covariance, normalised to `ρ ≥ 0`: `(−ρ, β + π)` flips the sign of the
-/// ρ–β covariance.
-fn normalized(rho: f64, beta: f64, covariance: Matrix2<f64>) -> (Line<f64>, Matrix2<f64>) {
-    if rho < 0.0 {
-        let flip = Matrix2::new(-1.0, 0.0, 0.0, 1.0);
-        (
-            Line {
-                rho: -rho,
-                beta: wrap_angle(beta + core::f64::consts::PI),
-            },
-            flip * covariance * flip,
-        )
-    } else {
-        (
-            Line {
-                rho,
-                beta: wrap_angle(beta),
-            },
-            covariance,
-        )
-    }
 }
 
 /// `line` with its covariance, rewritten as `(−ρ, β + π)` if its normal points away from

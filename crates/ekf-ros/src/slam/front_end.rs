@@ -1,0 +1,265 @@
+//! The SLAM front end, handed every fused scan by the replay loop: the filter localizes in
+//! a local map of the last key scans (so its error grows only with the path since them);
+//! a scan taken far enough from the last key scan becomes a key scan, tied to it in the
+//! pose graph by the filter's relative pose; loop closures found and confirmed
+//! ([`LoopClosures`]) are added and the graph optimised, and the filter restarted at its
+//! key scan's corrected pose.
+
+use super::key_scans::{KeyScan, KeyScans};
+use super::loop_closure::{LoopClosures, Outcome};
+use super::pose_graph::{relative, Edge, PoseGraph};
+use super::SlamParams;
+use crate::replay::{ReplayError, ScanHook};
+use ekf_core::{angle_diff, Pose2};
+use ekf_fusion::{Fuser, ScanFused};
+use lrf_lines::{fit_poses, LineMap, LocalizerConfig, ObservedLine, RelocalizeParams};
+use nalgebra::{Matrix3, Vector3};
+
+/// A scan's pose as the front end had it, and the key scan it follows.
+#[derive(Debug, Clone, Copy)]
+pub struct ScanPose {
+    /// The scan's stamp (ns).
+    pub t_ns: u64,
+    /// The front end's pose.
+    pub front: Pose2<f64>,
+    /// The last key scan at or before it.
+    pub key: usize,
+}
+
+/// The front end's state (see the module documentation).
+#[derive(Debug)]
+pub struct FrontEnd {
+    params: SlamParams,
+    mount: Pose2<f64>,
+    keys: KeyScans,
+    graph: PoseGraph,
+    loops: LoopClosures,
+    scans: Vec<ScanPose>,
+    /// The pose at the last scan, for the path length.
+    last_pose: Option<Pose2<f64>>,
+    path: f64,
+    /// Gauss–Newton iterations run over all optimisations.
+    pub(super) iterations: usize,
+    /// Scans the local map's search re-matched ([`FrontEnd::rematch`]).
+    pub(super) rematched: u64,
+}
+
+impl FrontEnd {
+    /// A front end with `params`, its localizer configured as `localizer` (laser mount,
+    /// matching) for the loop closures' refinement.
+    pub fn new(params: SlamParams, localizer: LocalizerConfig) -> Self {
+        Self {
+            mount: localizer.laser_mount,
+            keys: KeyScans::new(params.map_builder),
+            graph: PoseGraph::new(),
+            loops: LoopClosures::new(params, localizer),
+            params,
+            scans: Vec::new(),
+            last_pose: None,
+            path: 0.0,
+            iterations: 0,
+            rematched: 0,
+        }
+    }
+
+    /// The key scans.
+    pub fn keys(&self) -> &KeyScans {
+        &self.keys
+    }
+
+    /// The graph.
+    pub fn graph(&self) -> &PoseGraph {
+        &self.graph
+    }
+
+    /// The loop closures' counts.
+    pub fn loops(&self) -> super::loop_closure::LoopCounts {
+        self.loops.counts()
+    }
+
+    /// Path length driven (m).
+    pub fn path(&self) -> f64 {
+        self.path
+    }
+
+    /// Every scan's pose corrected by its key scan's graph pose:
+    /// `x_k ⊕ (front_k⁻¹ ⊕ front_t)`.
+    pub fn corrected_scans(&self) -> impl Iterator<Item = (u64, Pose2<f64>)> + '_ {
+        self.scans.iter().map(|s| {
+            let key = self.keys.get(s.key);
+            let local = key.front.inverse().compose(&s.front);
+            (s.t_ns, self.graph.poses()[s.key].compose(&local))
+        })
+    }
+
+    /// The map of every key scan at its graph pose.
+    pub fn map(&self) -> LineMap {
+        self.keys
+            .map_of(self.graph.poses(), 0..self.keys.len(), &self.mount)
+    }
+
+    /// The local map for key scan `k`: the key scans up to `local_map_path` behind it.
+    fn local_map(&self, k: usize) -> LineMap {
+        let path = self.keys.get(k).path;
+        let first = (0..=k)
+            .find(|&j| path - self.keys.get(j).path <= self.params.local_map_path)
+            .unwrap_or(k);
+        self.keys.map_of(self.graph.poses(), first..=k, &self.mount)
+    }
+
+    /// Odometry that erred more than the filter's prediction allows (a slipping wheel, a
+    /// bump) makes the gate refuse the right walls, and a map built from the scans after
+    /// it keeps the error. So a scan that the filter's pose does not explain (fewer than
+    /// half its line length on walls of the local map, as the relocalization search
+    /// scores it) is fused again with the covariance widened by `rematch_sigma_xy` and
+    /// `rematch_sigma_theta`; if the pose it gives puts at least as many lines (and two)
+    /// on walls and scores `min_margin` times better, it is kept, otherwise the filter is
+    /// put back. Returns the new pose.
+    fn rematch(&mut self, fuser: &mut Fuser, lines: &[ObservedLine]) -> Option<Pose2<f64>> {
+        let map = fuser.localizer().map();
+        if map.is_empty() || lines.is_empty() {
+            return None;
+        }
+        let search = RelocalizeParams::default();
+        let fit = |map: &LineMap, pose: Pose2<f64>| {
+            let fits = fit_poses(lines, map, &self.mount, &[pose], &search);
+            (fits.fits.first().copied(), fits.observed_length)
+        };
+        let (here, covariance) = (fuser.localizer().pose(), *fuser.localizer().covariance());
+        let (Some(before), observed) = fit(map, here) else {
+            return None;
+        };
+        if search.explains(before.inliers, before.score, observed) {
+            return None;
+        }
+        let (sxy, sth) = (
+            self.params.rematch_sigma_xy,
+            self.params.rematch_sigma_theta,
+        );
+        let widened =
+            covariance + Matrix3::from_diagonal(&Vector3::new(sxy * sxy, sxy * sxy, sth * sth));
+        let filter = fuser.localizer_mut();
+        filter.reset(here, widened).ok()?;
+        let refused = filter.update_lines(lines).is_err();
+        let pose = filter.pose();
+        let after = fit(filter.map(), pose).0;
+        let better = after.is_some_and(|a| {
+            a.inliers >= before.inliers.max(2) && a.score >= search.min_margin * before.score
+        });
+        if refused || !better {
+            filter.reset(here, covariance).ok()?;
+            return None;
+        }
+        self.rematched += 1;
+        Some(pose)
+    }
+
+    /// The edge from the previous key scan: the filter's relative pose, with the
+    /// front end's error model (`σ_xy = odometry_sigma_xy + odometry_sigma_xy_per_m · d`,
+    /// `σ_θ = odometry_sigma_theta + odometry_sigma_theta_per_rad · |Δθ|`).
+    fn odometry_edge(&self, from: usize, to: usize, measured: Pose2<f64>) -> Edge {
+        let p = &self.params;
+        let d = measured.x.hypot(measured.y);
+        let sxy = p.odometry_sigma_xy + p.odometry_sigma_xy_per_m * d;
+        let sth = p.odometry_sigma_theta + p.odometry_sigma_theta_per_rad * measured.theta.abs();
+        Edge {
+            from,
+            to,
+            measured,
+            information: Matrix3::from_diagonal(&Vector3::new(
+                1.0 / (sxy * sxy),
+                1.0 / (sxy * sxy),
+                1.0 / (sth * sth),
+            )),
+            robust: false,
+        }
+    }
+}
+
+impl ScanHook for FrontEnd {
+    fn scan_fused(
+        &mut self,
+        now: u64,
+        _fused: &ScanFused,
+        fuser: &mut Fuser,
+    ) -> Result<bool, ReplayError> {
+        let lines = fuser.localizer().last_lines().to_vec();
+        let pose = match self.rematch(fuser, &lines) {
+            Some(pose) => pose,
+            None => fuser.localizer().pose(),
+        };
+        if let Some(last) = self.last_pose.replace(pose) {
+            self.path += (pose.x - last.x).hypot(pose.y - last.y);
+        }
+        let previous = self.keys.len().checked_sub(1);
+        let is_key = match previous {
+            None => !lines.is_empty(),
+            Some(p) => {
+                let moved = relative(&self.keys.get(p).front, &pose);
+                moved.x.hypot(moved.y) >= self.params.key_distance
+                    || angle_diff(pose.theta, self.keys.get(p).front.theta).abs()
+                        >= self.params.key_angle
+            }
+        };
+        if !is_key {
+            if let Some(key) = previous {
+                self.scans.push(ScanPose {
+                    t_ns: now,
+                    front: pose,
+                    key,
+                });
+            }
+            return Ok(false);
+        }
+        let k = self.keys.push(KeyScan {
+            t_ns: now,
+            front: pose,
+            lines,
+            path: self.path,
+        });
+        match previous {
+            None => {
+                self.graph.add_node(pose);
+            }
+            Some(p) => {
+                let measured = relative(&self.keys.get(p).front, &pose);
+                let estimate = self.graph.poses()[p].compose(&measured);
+                self.graph.add_node(estimate);
+                self.graph
+                    .add_edge(self.odometry_edge(p, k, measured))
+                    .map_err(slam_error)?;
+            }
+        }
+        if let Outcome::Closed(edges) = self.loops.check(&self.keys, self.graph.poses(), k) {
+            for edge in edges {
+                self.graph.add_edge(edge).map_err(slam_error)?;
+            }
+            let report = self
+                .graph
+                .optimize(self.params.max_iterations)
+                .map_err(slam_error)?;
+            self.iterations += report.iterations;
+            let corrected = self.graph.poses()[k];
+            let covariance = *fuser.localizer().covariance();
+            fuser
+                .localizer_mut()
+                .reset(corrected, covariance)
+                .map_err(|e| slam_error(e.to_string()))?;
+            self.keys.get_mut(k).front = corrected;
+            self.last_pose = Some(corrected);
+        }
+        self.scans.push(ScanPose {
+            t_ns: now,
+            front: self.keys.get(k).front,
+            key: k,
+        });
+        let local = self.local_map(k);
+        fuser.localizer_mut().replace_map(local);
+        Ok(true)
+    }
+}
+
+/// A failure of the graph as a replay error.
+fn slam_error(e: impl std::fmt::Display) -> ReplayError {
+    ReplayError::Slam(e.to_string())
+}

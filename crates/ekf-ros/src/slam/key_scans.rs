@@ -1,0 +1,108 @@
+//! The key scans of a SLAM run: the lines each saw (sensor frame), when, and how far the
+//! robot had driven; maps are built from any set of them at their graph poses.
+
+use ekf_core::Pose2;
+use lrf_lines::{LineMap, MapBuilder, MapBuilderParams, ObservedLine};
+
+/// One key scan: a node of the pose graph.
+#[derive(Debug, Clone)]
+pub struct KeyScan {
+    /// The scan's stamp (ns).
+    pub t_ns: u64,
+    /// The front end's pose at the scan, in the frame of the poses it estimated after it
+    /// (the graph pose, when the front end was restarted there).
+    pub front: Pose2<f64>,
+    /// The scan's lines, sensor frame.
+    pub lines: Vec<ObservedLine>,
+    /// Path length driven up to the scan (m).
+    pub path: f64,
+}
+
+/// The key scans, in order, and how their lines are fused into maps.
+#[derive(Debug, Clone)]
+pub struct KeyScans {
+    keys: Vec<KeyScan>,
+    builder: MapBuilderParams,
+}
+
+impl KeyScans {
+    /// No key scans yet; maps fused with `builder`.
+    pub fn new(builder: MapBuilderParams) -> Self {
+        Self {
+            keys: Vec::new(),
+            builder,
+        }
+    }
+
+    /// Adds a key scan; returns its index.
+    pub fn push(&mut self, key: KeyScan) -> usize {
+        self.keys.push(key);
+        self.keys.len() - 1
+    }
+
+    /// Key scan `k`.
+    pub fn get(&self, k: usize) -> &KeyScan {
+        &self.keys[k]
+    }
+
+    /// Key scan `k`, to change.
+    pub fn get_mut(&mut self, k: usize) -> &mut KeyScan {
+        &mut self.keys[k]
+    }
+
+    /// How many.
+    pub fn len(&self) -> usize {
+        self.keys.len()
+    }
+
+    /// None yet.
+    pub fn is_empty(&self) -> bool {
+        self.keys.is_empty()
+    }
+
+    /// The key scans, in order.
+    pub fn iter(&self) -> impl Iterator<Item = &KeyScan> {
+        self.keys.iter()
+    }
+
+    /// The lines of key scan `k` and of the key scans up to `path` (m) of driving before
+    /// it, all in `k`'s sensor frame (placed by their poses in `poses`): one observation
+    /// with the walls of a few scans, for a search that one scan's few lines leave
+    /// ambiguous.
+    pub fn chain_lines(
+        &self,
+        poses: &[Pose2<f64>],
+        k: usize,
+        path: f64,
+        mount: &Pose2<f64>,
+    ) -> Vec<ObservedLine> {
+        let here = poses[k].compose(mount).inverse();
+        let end = self.keys[k].path;
+        (0..=k)
+            .rev()
+            .take_while(|&j| end - self.keys[j].path <= path)
+            .flat_map(|j| {
+                let sensor = here.compose(&poses[j].compose(mount));
+                self.keys[j].lines.iter().map(move |l| l.seen_from(&sensor))
+            })
+            .collect()
+    }
+
+    /// The map of the key scans `which`, each placed at its pose in `poses` ⊕ `mount`,
+    /// repeated sightings fused ([`MapBuilder`]).
+    pub fn map_of(
+        &self,
+        poses: &[Pose2<f64>],
+        which: impl IntoIterator<Item = usize>,
+        mount: &Pose2<f64>,
+    ) -> LineMap {
+        let Ok(mut builder) = MapBuilder::new(self.builder) else {
+            return LineMap::default();
+        };
+        for k in which {
+            // A key scan's lines were validated when its scan was fused.
+            let _ = builder.add_scan(&self.keys[k].lines, &poses[k].compose(mount));
+        }
+        builder.finish()
+    }
+}

@@ -1,0 +1,248 @@
+//! Recognising a place mapped before: the scan's lines searched for in a submap of old
+//! key scans near where the robot thinks it is (the relocalization search), the pose
+//! refined by an EKF update on those walls, and the hypothesis kept only if the key scans
+//! after it fit the same correction ([`LoopClosures`]).
+
+use super::key_scans::KeyScans;
+use super::pose_graph::{relative, Edge};
+use super::SlamParams;
+use ekf_core::{angle_diff, Pose2};
+use lrf_lines::{
+    relocalize, LineMap, Localizer, LocalizerConfig, ObservedLine, RelocalizeParams, SearchWindow,
+};
+use nalgebra::{Matrix3, Vector3};
+
+/// A loop closure found at one key scan and not yet confirmed by the ones after it.
+#[derive(Debug, Clone)]
+struct Pending {
+    /// The old key scan the submap is anchored at.
+    anchor: usize,
+    /// The submap (old key scans near the anchor, at their graph poses).
+    submap: LineMap,
+    /// World-frame correction `C` with `C ⊕ x_k` the pose found for key scan `k`.
+    correction: Pose2<f64>,
+    /// The edges found so far, anchor → key scan.
+    edges: Vec<Edge>,
+}
+
+/// Counts of what the loop-closure search did.
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
+pub struct LoopCounts {
+    /// Searches run (key scans with an old key scan within reach).
+    pub searches: u64,
+    /// Hypotheses that a search found and the refinement kept.
+    pub hypotheses: u64,
+    /// Hypotheses that the key scans after them did not confirm.
+    pub refuted: u64,
+    /// Loop closures added to the graph.
+    pub closures: u64,
+}
+
+/// The search, the verification of its hypotheses and their counts.
+#[derive(Debug)]
+pub struct LoopClosures {
+    params: SlamParams,
+    localizer: LocalizerConfig,
+    relocalize: RelocalizeParams,
+    pending: Option<Pending>,
+    /// Path length (m) at the last closure added.
+    last_closure_path: f64,
+    counts: LoopCounts,
+}
+
+/// What checking one key scan gave.
+pub enum Outcome {
+    /// Nothing to add.
+    Nothing,
+    /// A confirmed closure: add these edges and optimise.
+    Closed(Vec<Edge>),
+}
+
+impl LoopClosures {
+    /// With the SLAM parameters and the localizer's configuration (laser mount, matching)
+    /// for the refinement.
+    pub fn new(params: SlamParams, localizer: LocalizerConfig) -> Self {
+        Self {
+            params,
+            localizer,
+            relocalize: RelocalizeParams::default(),
+            pending: None,
+            last_closure_path: 0.0,
+            counts: LoopCounts::default(),
+        }
+    }
+
+    /// The counts so far.
+    pub fn counts(&self) -> LoopCounts {
+        self.counts
+    }
+
+    /// Checks the newest key scan `k` (graph poses in `poses`): confirms or refutes a
+    /// pending hypothesis, or searches for a new one.
+    pub fn check(&mut self, keys: &KeyScans, poses: &[Pose2<f64>], k: usize) -> Outcome {
+        let lines = &keys.chain_lines(
+            poses,
+            k,
+            self.params.chain_path,
+            &self.localizer.laser_mount,
+        );
+        if let Some(mut pending) = self.pending.take() {
+            let predicted = pending.correction.compose(&poses[k]);
+            let confirmed = refine(
+                &self.params,
+                &self.localizer,
+                lines,
+                &pending.submap,
+                &predicted,
+            )
+            .filter(|(pose, _)| close(pose, &predicted, &self.params));
+            let Some((pose, information)) = confirmed else {
+                self.counts.refuted += 1;
+                return Outcome::Nothing;
+            };
+            pending.edges.push(edge(
+                pending.anchor,
+                k,
+                &poses[pending.anchor],
+                &pose,
+                information,
+            ));
+            if pending.edges.len() <= self.params.verify_key_scans {
+                self.pending = Some(pending);
+                return Outcome::Nothing;
+            }
+            self.counts.closures += 1;
+            self.last_closure_path = keys.get(k).path;
+            return Outcome::Closed(pending.edges);
+        }
+        let path = keys.get(k).path;
+        if path - self.last_closure_path < self.params.loop_cooldown_path {
+            return Outcome::Nothing;
+        }
+        let reach = |j: usize| {
+            let since = (path - keys.get(j).path).min(path - self.last_closure_path);
+            (self.params.loop_radius + self.params.loop_drift * since)
+                .min(self.params.loop_max_radius)
+        };
+        let here = poses[k];
+        let anchor = (0..k)
+            .filter(|&j| path - keys.get(j).path >= self.params.loop_min_path)
+            .map(|j| (j, distance(&poses[j], &here)))
+            .filter(|&(j, d)| d <= reach(j))
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .map(|(j, _)| j);
+        let Some(anchor) = anchor else {
+            return Outcome::Nothing;
+        };
+        self.counts.searches += 1;
+        let submap = keys.map_of(
+            poses,
+            (0..k).filter(|&j| {
+                path - keys.get(j).path >= self.params.loop_min_path
+                    && distance(&poses[j], &poses[anchor]) <= self.params.submap_radius
+            }),
+            &self.localizer.laser_mount,
+        );
+        let window = SearchWindow {
+            center: nalgebra::Point2::new(here.x, here.y),
+            radius: reach(anchor),
+        };
+        let found = relocalize(
+            lines,
+            &submap,
+            &self.localizer.laser_mount,
+            &window,
+            &self.relocalize,
+        )
+        .filter(|r| r.is_unambiguous(&self.relocalize))
+        .filter(|r| angle_diff(r.best.pose.theta, here.theta).abs() <= self.params.loop_max_turn);
+        let Some(found) = found else {
+            return Outcome::Nothing;
+        };
+        let Some((pose, information)) = refine(
+            &self.params,
+            &self.localizer,
+            lines,
+            &submap,
+            &found.best.pose,
+        ) else {
+            return Outcome::Nothing;
+        };
+        self.counts.hypotheses += 1;
+        self.pending = Some(Pending {
+            anchor,
+            correction: pose.compose(&here.inverse()),
+            edges: vec![edge(anchor, k, &poses[anchor], &pose, information)],
+            submap,
+        });
+        Outcome::Nothing
+    }
+}
+
+/// The pose of the scan with `lines` against `map`, refined from `start` by one EKF
+/// update on the walls its lines match (prior `σ = refine_sigma_xy`,
+/// `refine_sigma_theta`), and the information the lines gave, `Σ⁻¹ − P₀⁻¹` (world
+/// frame); `None` if fewer than `min_loop_lines` lines fused.
+pub(super) fn refine(
+    params: &SlamParams,
+    localizer: &LocalizerConfig,
+    lines: &[ObservedLine],
+    map: &LineMap,
+    start: &Pose2<f64>,
+) -> Option<(Pose2<f64>, Matrix3<f64>)> {
+    let (sxy, sth) = (params.refine_sigma_xy, params.refine_sigma_theta);
+    let prior = Vector3::new(sxy * sxy, sxy * sxy, sth * sth);
+    let p0 = Matrix3::from_diagonal(&prior);
+    let mut filter = Localizer::new(localizer.clone(), *start, p0, map.clone()).ok()?;
+    let report = filter.update_lines(lines).ok()?;
+    if report.fused < params.min_loop_lines {
+        return None;
+    }
+    let posterior = filter.covariance().try_inverse()?;
+    let gained = posterior - Matrix3::from_diagonal(&prior.map(|v| 1.0 / v));
+    Some((
+        filter.pose(),
+        positive_part(&(0.5 * (gained + gained.transpose()))),
+    ))
+}
+
+/// The symmetric matrix with its negative eigenvalues (round-off) set to zero.
+fn positive_part(m: &Matrix3<f64>) -> Matrix3<f64> {
+    let eigen = m.symmetric_eigen();
+    let clamped = eigen.eigenvalues.map(|v| v.max(0.0));
+    let q = eigen.eigenvectors;
+    let p = q * Matrix3::from_diagonal(&clamped) * q.transpose();
+    0.5 * (p + p.transpose())
+}
+
+/// The edge anchor → key scan measured by a pose found for the key scan, with the
+/// world-frame information `Ω_w` turned into the residual's frame: the residual is the
+/// position error in the found pose's frame, so `Ω = Gᵀ Ω_w G`, `G = diag(R(θ), 1)`.
+fn edge(
+    anchor: usize,
+    k: usize,
+    anchor_pose: &Pose2<f64>,
+    found: &Pose2<f64>,
+    world_information: Matrix3<f64>,
+) -> Edge {
+    let (s, c) = found.theta.sin_cos();
+    let g = Matrix3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0);
+    let information = g.transpose() * world_information * g;
+    Edge {
+        from: anchor,
+        to: k,
+        measured: relative(anchor_pose, found),
+        information: 0.5 * (information + information.transpose()),
+        robust: true,
+    }
+}
+
+fn distance(a: &Pose2<f64>, b: &Pose2<f64>) -> f64 {
+    (a.x - b.x).hypot(a.y - b.y)
+}
+
+/// A confirmation agrees with the hypothesis' correction.
+fn close(a: &Pose2<f64>, b: &Pose2<f64>, params: &SlamParams) -> bool {
+    distance(a, b) <= params.verify_distance
+        && angle_diff(a.theta, b.theta).abs() <= params.verify_angle
+}
