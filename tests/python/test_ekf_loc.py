@@ -164,6 +164,40 @@ def test_map_build_from_log_equals_the_cli(ekf_bin, tmp_path):
     assert np.array_equal(built.segments, ekf_loc.LineMap.load(out).segments)
 
 
+def test_map_build_slam_equals_the_cli(ekf_bin, tmp_path):
+    built, trajectory, summary = ekf_loc.LineMap.build_slam(ACES)
+    out, tum = tmp_path / "slam.json", tmp_path / "slam.tum"
+    cli = run_ekf(ekf_bin, "map", "build", ACES, "--slam", "--out", out, "--tum", tum)
+    for s in (summary, cli):
+        s.pop("wall_time_s")
+        s.pop("log")
+    assert summary == cli
+    assert summary["key_scans"] > 100 and summary["segments"] == len(built)
+    assert np.array_equal(built.segments, ekf_loc.LineMap.load(out).segments)
+    rows = np.loadtxt(tum)
+    assert trajectory.shape == (len(rows), 4)
+    assert np.allclose(trajectory[:, :3], rows[:, :3], atol=1e-9)
+
+
+def test_import_grid_equals_the_cli(ekf_bin, tmp_path):
+    yaml = tmp_path / "aces.yaml"
+    run_ekf(ekf_bin, "map", "export-grid", ACES_MAP, "--out", yaml)
+    imported, summary = ekf_loc.LineMap.import_grid(yaml, params={"scan_spacing": 2.0})
+    out = tmp_path / "grid.json"
+    cli = run_ekf(ekf_bin, "map", "import-grid", yaml, "--scan-spacing", "2.0", "--out", out)
+    assert summary == cli
+    assert len(imported) > 50
+    assert np.array_equal(imported.segments, ekf_loc.LineMap.load(out).segments)
+    with pytest.raises(ValueError, match="params: invalid type"):
+        ekf_loc.LineMap.import_grid(yaml, params={"scan_spacing": "far"})
+
+
+def test_replay_grow_map_returns_the_grown_map():
+    first = ekf_loc.replay(ACES, mode="laser", init_from_truth=True)
+    grown = ekf_loc.replay(ACES, mode="laser", init_from_truth=True, grow_map=True)
+    assert len(first.map) < 20 < len(grown.map)
+
+
 # ---------------------------------------------------------------- matching, Localizer
 
 

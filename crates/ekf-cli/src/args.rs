@@ -140,6 +140,14 @@ pub struct ReplayArgs {
     /// relocalized, as one SVG.
     #[arg(long)]
     pub svg: Option<PathBuf>,
+    /// Keep adding walls to the first-scan map as the robot explores: every key scan
+    /// ([slam] key_distance, key_angle) adds its lines at the filter's pose, so the
+    /// filter keeps localizing after it leaves the first room.
+    #[arg(long, conflicts_with_all = ["map", "global"])]
+    pub grow_map: bool,
+    /// Write the map at the end (the grown map with --grow-map) as JSON.
+    #[arg(long)]
+    pub write_map: Option<PathBuf>,
     /// Print the summary as one JSON object.
     #[arg(long)]
     pub json: bool,
@@ -203,7 +211,7 @@ pub struct ConfigArgs {
 /// The arguments of `ekf simulate`.
 #[derive(Debug, Args)]
 pub struct SimulateArgs {
-    /// A built-in scenario (paper, triangle, walls, l-room, corridor) or a line map
+    /// A built-in scenario (paper, triangle, walls, l-room, corridor, two-rooms) or a line map
     /// (.json) whose room the robot drives around 1 m inside.
     pub scenario: String,
     /// The bag to write: an MCAP file, or with a path ending in `/` a bag directory
@@ -269,7 +277,7 @@ pub struct LiveArgs {
 /// The arguments of `ekf emulate`.
 #[derive(Debug, Args)]
 pub struct EmulateArgs {
-    /// A built-in scenario (paper, triangle, walls, l-room, corridor) or a line map
+    /// A built-in scenario (paper, triangle, walls, l-room, corridor, two-rooms) or a line map
     /// (.json) whose room the robot drives around 1 m inside.
     #[arg(long, default_value = "paper")]
     pub scenario: String,

@@ -9,5 +9,5 @@ pub mod import;
 pub mod plot;
 
 pub use ekf_devices::{devices, emulate, live};
-pub use ekf_ros::{config, eval, geo, mcap_io, replay, ros2, trajectory, tum};
+pub use ekf_ros::{config, eval, geo, mcap_io, replay, ros2, slam, trajectory, tum};
 pub use ekf_sim as sim;

@@ -140,6 +140,7 @@ fn replay_command(a: ReplayArgs) -> Outcome {
         tum: a.tum,
         keep_trajectories: a.svg.is_some(),
         global: a.global,
+        grow_map: a.grow_map,
     };
     let bar = progress_bar();
     let mut progress = |done: u64, total: u64| {
@@ -151,6 +152,9 @@ fn replay_command(a: ReplayArgs) -> Outcome {
     let outcome = replay::replay(&a.log, &config, &options, &mut progress)?;
     if let Some(b) = bar {
         b.finish_and_clear();
+    }
+    if let Some(path) = &a.write_map {
+        write_map(&outcome.map, path)?;
     }
     print_result(&outcome.summary, a.json, &outcome.summary)?;
     if let Some(path) = &a.svg {

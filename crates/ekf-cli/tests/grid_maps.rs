@@ -26,6 +26,7 @@ fn rmse_with(map: &Path) -> f64 {
         tum: None,
         keep_trajectories: false,
         global: false,
+        grow_map: false,
     };
     let outcome = replay(
         &testdata("aces.mcap"),

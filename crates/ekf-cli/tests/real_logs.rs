@@ -20,6 +20,7 @@ fn run(log: &str, mode: Mode, map: Option<&str>) -> ReplaySummary {
         tum: None,
         keep_trajectories: false,
         global: false,
+        grow_map: false,
     };
     let outcome = replay(&testdata(log), &Config::default(), &options, &mut |_, _| {}).unwrap();
     assert!(outcome.failure.is_none(), "{:?}", outcome.failure);

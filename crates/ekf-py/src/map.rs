@@ -1,12 +1,14 @@
 //! Line maps: the `LineMap` class (load, save, JSON, from arrays, from one scan, from a
-//! whole log) and `MapBuilder` (fusing the lines of many scans at known poses).
+//! whole log with or without its reference, from an occupancy grid) and `MapBuilder` (fusing the lines of many scans at known poses).
 
 use crate::arrays::{check_finite, check_shape, new_array, pose3, real_array};
 use crate::errors::{file_error, path_error, value_error};
 use crate::lines::Lines;
 use crate::params::{from_dict, to_python};
 use crate::replay::load_config;
+use ekf_ros::grid::{self, GridImportParams};
 use ekf_ros::map_build::{build_map, MapSource};
+use ekf_ros::slam::build_slam_map;
 use lrf_lines::MapBuilderParams;
 use nalgebra::Point2;
 use numpy::{Ix2, Ix3, PyArray2, PyArray3};
@@ -119,6 +121,62 @@ impl LineMap {
         };
         let (map, summary) = py
             .detach(|| build_map(&path, &config, source))
+            .map_err(|e| file_error(&e))?;
+        Ok((Self { map }, to_python(py, &summary)?))
+    }
+
+    /// The map of the log at `path` built without its reference, as `ekf map build
+    /// --slam` builds it (same code): the filter localizes in the map as it grows, loops
+    /// are closed where the robot comes back, and the key scans' pose graph optimised.
+    /// `config` is an `ekf` TOML config file or a dict of the same groups (its `slam`
+    /// group sets the builder). Returns the map, an (N, 4) array of the corrected pose at
+    /// every scan `[t (s), x, y, theta]`, and the summary `ekf map build --slam --json`
+    /// prints. Raises `OSError` / `ValueError` as `replay` does, also when the log breaks
+    /// off part-way.
+    #[staticmethod]
+    #[pyo3(signature = (path, config = None))]
+    fn build_slam<'py>(
+        py: Python<'py>,
+        path: PathBuf,
+        config: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<(Self, Bound<'py, PyArray2<f64>>, Bound<'py, PyAny>)> {
+        let config = load_config(config)?;
+        let outcome = py
+            .detach(|| build_slam_map(&path, &config, &mut |_, _| {}))
+            .map_err(|e| file_error(&e))?;
+        if let Some(failure) = outcome.failure {
+            return Err(file_error(&failure));
+        }
+        let rows: Vec<f64> = outcome
+            .trajectory
+            .iter()
+            .flat_map(|s| [s.t_ns as f64 * 1e-9, s.pose.x, s.pose.y, s.pose.theta])
+            .collect();
+        let n = outcome.trajectory.len();
+        let trajectory = new_array(py, rows, Ix2(n, 4))?;
+        let summary = to_python(py, &outcome.summary)?;
+        Ok((Self { map: outcome.map }, trajectory, summary))
+    }
+
+    /// The walls of a `map_server` / Nav2 occupancy grid (`yaml`: its YAML file, with a
+    /// PGM or PNG image), as `ekf map import-grid` extracts them (same code): virtual
+    /// scans over the free cells, their lines fused. `config` sets the line extraction
+    /// (its `localizer.extraction` group); `params` is a dict of `scan_spacing`, `beams`,
+    /// `max_range`, `min_sightings`. Returns the map and the summary `ekf map import-grid
+    /// --json` prints. Raises `OSError` for an unreadable file, `ValueError` for a bad
+    /// YAML, image or parameter.
+    #[staticmethod]
+    #[pyo3(signature = (yaml, config = None, params = None))]
+    fn import_grid<'py>(
+        py: Python<'py>,
+        yaml: PathBuf,
+        config: Option<&Bound<'py, PyAny>>,
+        params: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<(Self, Bound<'py, PyAny>)> {
+        let config = load_config(config)?;
+        let params = from_dict::<GridImportParams>(params, "params")?;
+        let (map, summary) = py
+            .detach(|| grid::import(&yaml, &config.localizer.extraction, &params))
             .map_err(|e| file_error(&e))?;
         Ok((Self { map }, to_python(py, &summary)?))
     }

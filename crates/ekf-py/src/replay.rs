@@ -39,6 +39,9 @@ pub struct ReplayResult {
     pub reference_theta: Py<PyArray1<f64>>,
     /// The summary dict, exactly what `ekf replay --json` prints.
     pub summary: Py<PyAny>,
+    /// The map at the end: the given one, the first scan's, or with `grow_map` the grown
+    /// map.
+    pub map: Py<crate::map::LineMap>,
 }
 
 /// The `ekf` configuration: the defaults for `None`, a TOML file for a path (as
@@ -78,11 +81,15 @@ pub(crate) fn parse_mode(mode: &str) -> PyResult<Mode> {
 /// `map`: a JSON line map; None builds the map from the first scan (the paper's §III).
 /// `init_from_truth`: start at the log's first reference pose. `global_localization`: no
 /// initial pose; the map is searched from the first scans (as `ekf replay --global`).
+/// `grow_map`: keep adding walls to the first-scan map as the robot explores (as `ekf
+/// replay --grow-map`); the result's map is then the grown map.
 ///
 /// Raises `OSError` if a file cannot be read, `ValueError` for an unusable log, config or
 /// map (the CLI's messages), also when the log breaks off part-way.
 #[pyfunction]
-#[pyo3(signature = (path, config = None, mode = "laser+compass", map = None, init_from_truth = false, global_localization = false))]
+#[pyo3(signature = (path, config = None, mode = "laser+compass", map = None, init_from_truth = false, global_localization = false, grow_map = false))]
+// One argument per Python keyword argument, as the CLI has one flag each.
+#[allow(clippy::too_many_arguments)]
 pub fn replay(
     py: Python<'_>,
     path: PathBuf,
@@ -91,6 +98,7 @@ pub fn replay(
     map: Option<PathBuf>,
     init_from_truth: bool,
     global_localization: bool,
+    grow_map: bool,
 ) -> PyResult<ReplayResult> {
     let config = load_config(config)?;
     let mode = parse_mode(mode)?;
@@ -106,6 +114,7 @@ pub fn replay(
         tum: None,
         keep_trajectories: true,
         global: global_localization,
+        grow_map,
     };
     let outcome = py
         .detach(|| replay_log(&path, &config, &options, &mut |_, _| {}))
@@ -139,5 +148,6 @@ pub fn replay(
         reference_y: column(reference, |p| p.y)?,
         reference_theta: column(reference, |p| p.theta)?,
         summary: to_python(py, &outcome.summary)?.unbind(),
+        map: Py::new(py, crate::map::LineMap { map: outcome.map })?,
     })
 }

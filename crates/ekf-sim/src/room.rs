@@ -76,6 +76,30 @@ impl Room {
         )
     }
 
+    /// Two rooms joined by a corridor: room A 6 m × 4 m at the origin, a corridor 8 m
+    /// long and 2 m wide from the middle of its east wall, room B 6 m × 4 m beyond. From
+    /// room A the laser (8 m) does not see room B: a first-scan map covers room A only.
+    pub fn two_rooms() -> Self {
+        Self::polygon(
+            &[
+                [0.0, 0.0],
+                [6.0, 0.0],
+                [6.0, 1.0],
+                [14.0, 1.0],
+                [14.0, 0.0],
+                [20.0, 0.0],
+                [20.0, 4.0],
+                [14.0, 4.0],
+                [14.0, 3.0],
+                [6.0, 3.0],
+                [6.0, 4.0],
+                [0.0, 4.0],
+            ],
+            &[],
+            0.0,
+        )
+    }
+
     /// The walls of a line map (e.g. a user's JSON map).
     pub fn from_map(map: &LineMap) -> Self {
         Self {

@@ -14,7 +14,14 @@ use serde::Serialize;
 const MAX_ROOM: f64 = 1000.0;
 
 /// The built-in scenarios, by name.
-pub const BUILTIN: [&str; 5] = ["paper", "triangle", "walls", "l-room", "corridor"];
+pub const BUILTIN: [&str; 6] = [
+    "paper",
+    "triangle",
+    "walls",
+    "l-room",
+    "corridor",
+    "two-rooms",
+];
 
 /// Everything a simulation run needs except the seed.
 #[derive(Debug, Clone, PartialEq)]
@@ -124,7 +131,11 @@ impl Scenario {
     /// - `triangle`: the same room, a rounded triangle (Fig. 11b);
     /// - `walls`: the same room, a loop 0.6 m from the walls (Fig. 12);
     /// - `l-room`: an L-shaped room with three pillars, a loop through both arms;
-    /// - `corridor`: a 20 m × 2.2 m corridor, a long loop down and back.
+    /// - `corridor`: a 20 m × 2.2 m corridor, a long loop down and back;
+    /// - `two-rooms`: two 6 m × 4 m rooms joined by an 8 m corridor
+    ///   ([`Room::two_rooms`]), a loop from room A through the corridor into room B and
+    ///   back (lanes 0.6 m from the corridor's walls), 300 s: most of it out of the first
+    ///   scan's room.
     ///
     /// Each starts on its path's first straight edge, heading along it.
     /// The three scenarios in the paper's room use the paper's compass (σ = 0.1°,
@@ -168,6 +179,12 @@ impl Scenario {
                 0.45,
                 [3.0, 0.6],
             ),
+            "two-rooms" => (
+                Room::two_rooms(),
+                points(&[[1.0, 1.6], [19.0, 1.6], [19.0, 2.4], [1.0, 2.4]]),
+                0.35,
+                [2.0, 1.6],
+            ),
             _ => return Err(ScenarioError::Unknown { name: name.into() }),
         };
         let path = Path::rounded_polygon(&corners, radius)?;
@@ -177,6 +194,9 @@ impl Scenario {
         scenario.start = Pose2::new(start[0], start[1], 0.0);
         if scenario.room == Room::paper() {
             scenario.compass = CompassModel::paper();
+        }
+        if name == "two-rooms" {
+            scenario.duration_s = 300.0;
         }
         Ok(scenario)
     }

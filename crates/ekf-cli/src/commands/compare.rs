@@ -253,6 +253,7 @@ pub fn compare(
             tum: None,
             keep_trajectories: true,
             global: false,
+            grow_map: false,
         };
         let outcome = match replay(log, config, &replay_options, &mut |_, _| {}) {
             Err(e) => ModeOutcome::Unavailable {

@@ -139,6 +139,7 @@ fn fill_row(
         tum: Some(work_dir.join(format!("{name}.tum"))),
         keep_trajectories: true,
         global,
+        grow_map: false,
     };
     let mut config = config.clone();
     if global {

@@ -541,6 +541,7 @@ impl<'a> Live<'a> {
             tum: None,
             keep_trajectories: false,
             global: false,
+            grow_map: false,
         };
         let name = options
             .record
@@ -844,6 +845,7 @@ mod forecast_tests {
             tum: None,
             keep_trajectories: false,
             global: false,
+            grow_map: false,
         };
         let preamble = Preamble {
             scan_frame: None,

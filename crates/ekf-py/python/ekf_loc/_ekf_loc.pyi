@@ -320,6 +320,23 @@ class LineMap:
         params: Optional[_ConfigDict] = None,
     ) -> Tuple["LineMap", dict[str, Any]]:
         """``ekf map build`` on a ROS 2 bag; returns the map and the --json summary."""
+    @staticmethod
+    def build_slam(
+        path: _PathLike,
+        config: Union[None, _PathLike, _ConfigDict] = None,
+    ) -> Tuple["LineMap", _F64Array, dict[str, Any]]:
+        """``ekf map build --slam`` on a ROS 2 bag (no reference read); returns the map,
+        the (N, 4) corrected pose at every scan ``[t (s), x, y, theta]`` and the --json
+        summary."""
+    @staticmethod
+    def import_grid(
+        yaml: _PathLike,
+        config: Union[None, _PathLike, _ConfigDict] = None,
+        params: Optional[_ConfigDict] = None,
+    ) -> Tuple["LineMap", dict[str, Any]]:
+        """``ekf map import-grid`` on a map_server / Nav2 YAML + PGM/PNG; returns the map
+        and the --json summary. ``params``: scan_spacing, beams, max_range,
+        min_sightings."""
     @property
     def segments(self) -> _F64Array:
         """(N, 2, 2) wall end points (m)."""
@@ -499,6 +516,9 @@ class ReplayResult:
     def reference_theta(self) -> _F64Array: ...
     @property
     def summary(self) -> dict[str, Any]: ...
+    @property
+    def map(self) -> LineMap:
+        """The map at the end (the grown map with ``grow_map``)."""
 
 def replay(
     path: _PathLike,
@@ -507,12 +527,14 @@ def replay(
     map: Optional[_PathLike] = None,
     init_from_truth: bool = False,
     global_localization: bool = False,
+    grow_map: bool = False,
 ) -> ReplayResult:
     """``ekf replay`` on a ROS 2 bag (same code), writing no files. ``mode``: odometry,
     compass, laser or laser+compass. ``map``: JSON line map (None: the first scan).
     ``global_localization``: no initial pose, the map is searched from the first scans
     (``ekf replay --global``; needs ``map``); ``summary["tracking"]["locked_on_scan"]``
-    says when it locked on."""
+    says when it locked on. ``grow_map``: keep adding walls to the first-scan map
+    (``ekf replay --grow-map``); ``map`` of the result is the grown map."""
 
 @final
 class SimulationResult:

@@ -58,6 +58,9 @@ pub struct ReplayOptions {
     pub out_mcap: Option<PathBuf>,
     /// Output TUM trajectory.
     pub tum: Option<PathBuf>,
+    /// Keep adding walls to the map as the robot explores ([`crate::slam::MapGrowth`]);
+    /// [`ReplayOutcome::map`] is then the grown map.
+    pub grow_map: bool,
     /// Keep the estimated and reference trajectories in memory (for plots); otherwise the
     /// replay streams in memory that does not grow with the log.
     pub keep_trajectories: bool,
@@ -222,6 +225,11 @@ pub fn replay_with(
         motion_topic,
         (config.timing.max_lag * 1e9) as u64,
     )?;
+    let mut growth = match options.grow_map {
+        true => Some(crate::slam::MapGrowth::new(&config.slam)?),
+        false => None,
+    };
+    let hook = hook.or(growth.as_mut().map(|g| g as &mut dyn ScanHook));
     if let Some(hook) = hook {
         run = run.with_hook(hook);
     }

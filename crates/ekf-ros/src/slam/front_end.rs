@@ -5,14 +5,15 @@
 //! ([`LoopClosures`]) are added and the graph optimised, and the filter restarted at its
 //! key scan's corrected pose.
 
-use super::key_scans::{KeyScan, KeyScans};
+use super::key_scans::{is_key, KeyScan, KeyScans};
 use super::loop_closure::{LoopClosures, Outcome};
 use super::pose_graph::{relative, Edge, PoseGraph};
+use super::rematch::rematch;
 use super::SlamParams;
 use crate::replay::{ReplayError, ScanHook};
-use ekf_core::{angle_diff, Pose2};
+use ekf_core::Pose2;
 use ekf_fusion::{Fuser, ScanFused};
-use lrf_lines::{fit_poses, LineMap, LocalizerConfig, ObservedLine, RelocalizeParams};
+use lrf_lines::{LineMap, LocalizerConfig};
 use nalgebra::{Matrix3, Vector3};
 
 /// A scan's pose as the front end had it, and the key scan it follows.
@@ -40,7 +41,7 @@ pub struct FrontEnd {
     path: f64,
     /// Gauss–Newton iterations run over all optimisations.
     pub(super) iterations: usize,
-    /// Scans the local map's search re-matched ([`FrontEnd::rematch`]).
+    /// Scans fused again with a widened covariance ([`rematch`]).
     pub(super) rematched: u64,
 }
 
@@ -107,53 +108,6 @@ impl FrontEnd {
         self.keys.map_of(self.graph.poses(), first..=k, &self.mount)
     }
 
-    /// Odometry that erred more than the filter's prediction allows (a slipping wheel, a
-    /// bump) makes the gate refuse the right walls, and a map built from the scans after
-    /// it keeps the error. So a scan that the filter's pose does not explain (fewer than
-    /// half its line length on walls of the local map, as the relocalization search
-    /// scores it) is fused again with the covariance widened by `rematch_sigma_xy` and
-    /// `rematch_sigma_theta`; if the pose it gives puts at least as many lines (and two)
-    /// on walls and scores `min_margin` times better, it is kept, otherwise the filter is
-    /// put back. Returns the new pose.
-    fn rematch(&mut self, fuser: &mut Fuser, lines: &[ObservedLine]) -> Option<Pose2<f64>> {
-        let map = fuser.localizer().map();
-        if map.is_empty() || lines.is_empty() {
-            return None;
-        }
-        let search = RelocalizeParams::default();
-        let fit = |map: &LineMap, pose: Pose2<f64>| {
-            let fits = fit_poses(lines, map, &self.mount, &[pose], &search);
-            (fits.fits.first().copied(), fits.observed_length)
-        };
-        let (here, covariance) = (fuser.localizer().pose(), *fuser.localizer().covariance());
-        let (Some(before), observed) = fit(map, here) else {
-            return None;
-        };
-        if search.explains(before.inliers, before.score, observed) {
-            return None;
-        }
-        let (sxy, sth) = (
-            self.params.rematch_sigma_xy,
-            self.params.rematch_sigma_theta,
-        );
-        let widened =
-            covariance + Matrix3::from_diagonal(&Vector3::new(sxy * sxy, sxy * sxy, sth * sth));
-        let filter = fuser.localizer_mut();
-        filter.reset(here, widened).ok()?;
-        let refused = filter.update_lines(lines).is_err();
-        let pose = filter.pose();
-        let after = fit(filter.map(), pose).0;
-        let better = after.is_some_and(|a| {
-            a.inliers >= before.inliers.max(2) && a.score >= search.min_margin * before.score
-        });
-        if refused || !better {
-            filter.reset(here, covariance).ok()?;
-            return None;
-        }
-        self.rematched += 1;
-        Some(pose)
-    }
-
     /// The edge from the previous key scan: the filter's relative pose, with the
     /// front end's error model (`σ_xy = odometry_sigma_xy + odometry_sigma_xy_per_m · d`,
     /// `σ_θ = odometry_sigma_theta + odometry_sigma_theta_per_rad · |Δθ|`).
@@ -184,8 +138,11 @@ impl ScanHook for FrontEnd {
         fuser: &mut Fuser,
     ) -> Result<bool, ReplayError> {
         let lines = fuser.localizer().last_lines().to_vec();
-        let pose = match self.rematch(fuser, &lines) {
-            Some(pose) => pose,
+        let pose = match rematch(fuser, &lines, &self.params) {
+            Some(pose) => {
+                self.rematched += 1;
+                pose
+            }
             None => fuser.localizer().pose(),
         };
         if let Some(last) = self.last_pose.replace(pose) {
@@ -194,12 +151,7 @@ impl ScanHook for FrontEnd {
         let previous = self.keys.len().checked_sub(1);
         let is_key = match previous {
             None => !lines.is_empty(),
-            Some(p) => {
-                let moved = relative(&self.keys.get(p).front, &pose);
-                moved.x.hypot(moved.y) >= self.params.key_distance
-                    || angle_diff(pose.theta, self.keys.get(p).front.theta).abs()
-                        >= self.params.key_angle
-            }
+            Some(p) => is_key(&self.keys.get(p).front, &pose, &self.params),
         };
         if !is_key {
             if let Some(key) = previous {

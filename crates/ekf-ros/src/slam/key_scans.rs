@@ -1,8 +1,16 @@
 //! The key scans of a SLAM run: the lines each saw (sensor frame), when, and how far the
 //! robot had driven; maps are built from any set of them at their graph poses.
 
-use ekf_core::Pose2;
+use super::SlamParams;
+use ekf_core::{angle_diff, Pose2};
 use lrf_lines::{LineMap, MapBuilder, MapBuilderParams, ObservedLine};
+
+/// Whether a scan at `pose` is a key scan after the last one at `last`: it is
+/// `key_distance` from it or turned `key_angle`.
+pub fn is_key(last: &Pose2<f64>, pose: &Pose2<f64>, params: &SlamParams) -> bool {
+    (pose.x - last.x).hypot(pose.y - last.y) >= params.key_distance
+        || angle_diff(pose.theta, last.theta).abs() >= params.key_angle
+}
 
 /// One key scan: a node of the pose graph.
 #[derive(Debug, Clone)]

@@ -14,11 +14,14 @@
 //! key scan's. The reference topic is not read.
 
 mod front_end;
+mod growth;
 mod key_scans;
 mod loop_closure;
 pub mod pose_graph;
+mod rematch;
 
 pub use front_end::FrontEnd;
+pub use growth::MapGrowth;
 pub use loop_closure::LoopCounts;
 
 use crate::config::Config;
