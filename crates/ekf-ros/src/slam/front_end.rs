@@ -16,6 +16,10 @@ use ekf_fusion::{Fuser, ScanFused};
 use lrf_lines::{LineMap, LocalizerConfig};
 use nalgebra::{Matrix3, Vector3};
 
+/// A closure whose edges cost more than `χ²(this, 3 per edge)` at the graph's poses is
+/// a surprise: the graph is optimised and the filter restarted at once.
+const SURPRISE_PROBABILITY: f64 = 0.99;
+
 /// A scan's pose as the front end had it, and the key scan it follows.
 #[derive(Debug, Clone, Copy)]
 pub struct ScanPose {
@@ -41,6 +45,10 @@ pub struct FrontEnd {
     path: f64,
     /// Gauss–Newton iterations run over all optimisations.
     pub(super) iterations: usize,
+    /// Optimisations run.
+    pub(super) optimizations: usize,
+    /// Closures were added since the last optimisation.
+    unoptimized: bool,
     /// Scans fused again with a widened covariance ([`rematch`]).
     pub(super) rematched: u64,
 }
@@ -59,6 +67,8 @@ impl FrontEnd {
             last_pose: None,
             path: 0.0,
             iterations: 0,
+            optimizations: 0,
+            unoptimized: false,
             rematched: 0,
         }
     }
@@ -81,6 +91,28 @@ impl FrontEnd {
     /// Path length driven (m).
     pub fn path(&self) -> f64 {
         self.path
+    }
+
+    /// Optimises the graph (Gauss–Newton, at most `max_iterations`).
+    fn optimize(&mut self) -> Result<(), ReplayError> {
+        let report = self
+            .graph
+            .optimize(self.params.max_iterations)
+            .map_err(slam_error)?;
+        self.iterations += report.iterations;
+        self.optimizations += 1;
+        self.unoptimized = false;
+        Ok(())
+    }
+
+    /// Optimises the graph once more if closures were added since the last optimisation;
+    /// call at the end of the log, before [`map`](Self::map) and
+    /// [`corrected_scans`](Self::corrected_scans).
+    pub fn finish(&mut self) -> Result<(), ReplayError> {
+        if self.unoptimized {
+            self.optimize()?;
+        }
+        Ok(())
     }
 
     /// Every scan's pose corrected by its key scan's graph pose:
@@ -183,22 +215,28 @@ impl ScanHook for FrontEnd {
             }
         }
         if let Outcome::Closed(edges) = self.loops.check(&self.keys, self.graph.poses(), k) {
+            // A closure the graph already agrees with (its edges' cost within the
+            // chi-square bound) changes nothing now: it joins the final optimisation.
+            let surprise: f64 = edges.iter().map(|e| self.graph.edge_cost(e)).sum();
+            let dof = 3 * edges.len() as u32;
+            let bound =
+                ekf_core::chi_square_quantile(SURPRISE_PROBABILITY, dof).map_err(slam_error)?;
             for edge in edges {
                 self.graph.add_edge(edge).map_err(slam_error)?;
             }
-            let report = self
-                .graph
-                .optimize(self.params.max_iterations)
-                .map_err(slam_error)?;
-            self.iterations += report.iterations;
-            let corrected = self.graph.poses()[k];
-            let covariance = *fuser.localizer().covariance();
-            fuser
-                .localizer_mut()
-                .reset(corrected, covariance)
-                .map_err(|e| slam_error(e.to_string()))?;
-            self.keys.get_mut(k).front = corrected;
-            self.last_pose = Some(corrected);
+            if surprise <= bound {
+                self.unoptimized = true;
+            } else {
+                self.optimize()?;
+                let corrected = self.graph.poses()[k];
+                let covariance = *fuser.localizer().covariance();
+                fuser
+                    .localizer_mut()
+                    .reset(corrected, covariance)
+                    .map_err(|e| slam_error(e.to_string()))?;
+                self.keys.get_mut(k).front = corrected;
+                self.last_pose = Some(corrected);
+            }
         }
         self.scans.push(ScanPose {
             t_ns: now,

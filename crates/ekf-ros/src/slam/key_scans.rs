@@ -96,6 +96,44 @@ impl KeyScans {
             .collect()
     }
 
+    /// The walls of [`chain_lines`](Self::chain_lines)' key scans fused into one map, as
+    /// segments in `k`'s sensor frame: what a search for the place needs (each wall once,
+    /// as long as the scans saw it), not what a filter fuses (their covariances are not
+    /// kept: a nominal 1 cm, 0.5° is set).
+    pub fn chain_walls(
+        &self,
+        poses: &[Pose2<f64>],
+        k: usize,
+        path: f64,
+        mount: &Pose2<f64>,
+    ) -> Vec<ObservedLine> {
+        let end = self.keys[k].path;
+        let first = (0..=k)
+            .rev()
+            .take_while(|&j| end - self.keys[j].path <= path)
+            .last()
+            .unwrap_or(k);
+        let here = poses[k].compose(mount).inverse();
+        let nominal = nalgebra::Matrix2::new(1e-4, 0.0, 0.0, 0.5f64.to_radians().powi(2));
+        self.map_of(poses, first..=k, mount)
+            .segments
+            .iter()
+            .filter_map(|wall| {
+                let (start, end) = (
+                    here.transform_point(&wall.start),
+                    here.transform_point(&wall.end),
+                );
+                Some(ObservedLine {
+                    line: ekf_core::Line::from_segment(&start, &end).ok()?,
+                    covariance: nominal,
+                    start,
+                    end,
+                    num_points: 0,
+                })
+            })
+            .collect()
+    }
+
     /// The map of the key scans `which`, each placed at its pose in `poses` ⊕ `mount`,
     /// repeated sightings fused ([`MapBuilder`]).
     pub fn map_of(

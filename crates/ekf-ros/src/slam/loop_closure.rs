@@ -65,7 +65,12 @@ impl LoopClosures {
         Self {
             params,
             localizer,
-            relocalize: RelocalizeParams::default(),
+            // Two walls on the submap make a hypothesis: the key scans after it must
+            // confirm it before it is a closure.
+            relocalize: RelocalizeParams {
+                min_inliers: 2,
+                ..RelocalizeParams::default()
+            },
             pending: None,
             last_closure_path: 0.0,
             counts: LoopCounts::default(),
@@ -135,20 +140,32 @@ impl LoopClosures {
             return Outcome::Nothing;
         };
         self.counts.searches += 1;
+        // The old key scans nearest the anchor, at most `submap_max_keys`: a place
+        // revisited many times does not make the search slower each time.
+        let mut near: Vec<(usize, f64)> = (0..k)
+            .filter(|&j| path - keys.get(j).path >= self.params.loop_min_path)
+            .map(|j| (j, distance(&poses[j], &poses[anchor])))
+            .filter(|&(_, d)| d <= self.params.submap_radius)
+            .collect();
+        near.sort_by(|a, b| a.1.total_cmp(&b.1));
+        near.truncate(self.params.submap_max_keys);
         let submap = keys.map_of(
             poses,
-            (0..k).filter(|&j| {
-                path - keys.get(j).path >= self.params.loop_min_path
-                    && distance(&poses[j], &poses[anchor]) <= self.params.submap_radius
-            }),
+            near.iter().map(|&(j, _)| j),
             &self.localizer.laser_mount,
         );
         let window = SearchWindow {
             center: nalgebra::Point2::new(here.x, here.y),
             radius: reach(anchor),
         };
+        let walls = keys.chain_walls(
+            poses,
+            k,
+            self.params.chain_path,
+            &self.localizer.laser_mount,
+        );
         let found = relocalize(
-            lines,
+            &walls,
             &submap,
             &self.localizer.laser_mount,
             &window,

@@ -61,12 +61,15 @@ pub struct SlamParams {
     pub loop_max_turn: f64,
     /// Path (m) after a closure before the next is searched for.
     pub loop_cooldown_path: f64,
-    /// A loop closure is searched for with the lines of the key scans up to this path
-    /// (m) before the newest, placed by the front end: a few scans' walls, where one
-    /// scan's two to six lines are often ambiguous.
+    /// A loop closure is searched for with the walls of the key scans up to this path
+    /// (m) before the newest, placed by the front end and fused: a few scans' walls,
+    /// where one scan's two to six lines are often ambiguous; their lines refine the
+    /// pose found.
     pub chain_path: f64,
-    /// Old key scans within this distance (m) of the closure's anchor make its submap.
+    /// Old key scans within this distance (m) of the closure's anchor make its submap ...
     pub submap_radius: f64,
+    /// ... the nearest this many of them.
+    pub submap_max_keys: usize,
     /// Key scans after a hypothesis that must fit its correction before it is a closure.
     pub verify_key_scans: usize,
     /// How close (m) a confirming key scan's pose must come to the correction's.
@@ -113,6 +116,7 @@ impl Default for SlamParams {
             loop_cooldown_path: 2.0,
             chain_path: 3.0,
             submap_radius: 8.0,
+            submap_max_keys: 40,
             verify_key_scans: 2,
             verify_distance: 0.3,
             verify_angle: 3f64.to_radians(),
@@ -200,6 +204,8 @@ pub struct SlamSummary {
     pub edges: usize,
     /// What the loop-closure search did.
     pub loops: LoopCounts,
+    /// Optimisations of the graph (a closure it already agreed with waits for the last).
+    pub optimizations: usize,
     /// Gauss–Newton iterations over all optimisations.
     pub graph_iterations: usize,
     /// Scans the front end re-matched in its local map (odometry that erred more than
@@ -278,6 +284,7 @@ pub fn build_slam_map(
         ..ReplayOptions::default()
     };
     let outcome = replay_with(log, &config, &options, Some(&mut front), progress)?;
+    front.finish()?;
     let map = front.map();
     let mut trajectory = Trajectory::default();
     for (t, pose) in front.corrected_scans() {
@@ -291,6 +298,7 @@ pub fn build_slam_map(
         path_m: front.path(),
         edges: front.graph().edges().len(),
         loops: front.loops(),
+        optimizations: front.optimizations,
         graph_iterations: front.iterations,
         rematched: front.rematched,
         segments: map.len(),

@@ -15,6 +15,7 @@
 
 use ekf_core::{wrap_angle, Pose2};
 use faer::linalg::solvers::Solve;
+use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
 use faer::sparse::{SparseColMat, Triplet};
 use faer::{Mat, Side};
 use nalgebra::{Matrix2, Matrix3, Vector2, Vector3};
@@ -147,11 +148,22 @@ impl PoseGraph {
         self.edges
             .iter()
             .map(|e| {
-                let r = residual(e, &self.poses[e.from], &self.poses[e.to]);
-                let c = (r.transpose() * e.information * r)[0];
+                let c = self.edge_cost(e);
                 weight(e, c) * c
             })
             .sum()
+    }
+
+    /// The unweighted cost `eᵀ Ω e` of `edge` (in the graph or not) at the current
+    /// poses; infinite if it names a node the graph does not have.
+    pub fn edge_cost(&self, edge: &Edge) -> f64 {
+        match (self.poses.get(edge.from), self.poses.get(edge.to)) {
+            (Some(pi), Some(pj)) => {
+                let r = residual(edge, pi, pj);
+                (r.transpose() * edge.information * r)[0]
+            }
+            _ => f64::INFINITY,
+        }
     }
 
     /// Gauss–Newton on the poses (the first held fixed), at most `max_iterations`
@@ -167,8 +179,11 @@ impl PoseGraph {
         if self.poses.len() < 2 {
             return Ok(report);
         }
+        // The pattern of the normal equations is the same at every iteration: its
+        // ordering and symbolic factorisation are computed once.
+        let mut symbolic = None;
         for _ in 0..max_iterations {
-            let step = self.gauss_newton_step()?;
+            let step = self.gauss_newton_step(&mut symbolic)?;
             let before = self.poses.clone();
             for (i, pose) in self.poses.iter_mut().enumerate().skip(1) {
                 let k = 3 * (i - 1);
@@ -193,8 +208,12 @@ impl PoseGraph {
     }
 
     /// One step: solves `H Δ = −b`, `H = Σ Jᵀ w Ω J`, `b = Σ Jᵀ w Ω e`, over the poses
-    /// after the first.
-    fn gauss_newton_step(&self) -> Result<Vec<f64>, GraphError> {
+    /// after the first (the lower triangle of `H` assembled; `symbolic` is its symbolic
+    /// factorisation, made on the first call).
+    fn gauss_newton_step(
+        &self,
+        symbolic: &mut Option<SymbolicLlt<usize>>,
+    ) -> Result<Vec<f64>, GraphError> {
         let n = 3 * (self.poses.len() - 1);
         let mut triplets = Vec::with_capacity(36 * self.edges.len() + n);
         let mut b = vec![0.0; n];
@@ -220,7 +239,9 @@ impl PoseGraph {
                     let h = ja.transpose() * omega * jc;
                     for row in 0..3 {
                         for col in 0..3 {
-                            triplets.push(Triplet::new(ka + row, kc + col, h[(row, col)]));
+                            if ka + row >= kc + col {
+                                triplets.push(Triplet::new(ka + row, kc + col, h[(row, col)]));
+                            }
                         }
                     }
                 }
@@ -233,8 +254,15 @@ impl PoseGraph {
         }
         let h = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &triplets)
             .map_err(|_| GraphError::Singular)?;
-        let llt = h
-            .sp_cholesky(Side::Lower)
+        let pattern = match symbolic {
+            Some(pattern) => pattern.clone(),
+            None => {
+                let pattern = SymbolicLlt::try_new(h.symbolic(), Side::Lower)
+                    .map_err(|_| GraphError::Singular)?;
+                symbolic.insert(pattern).clone()
+            }
+        };
+        let llt = Llt::try_new_with_symbolic(pattern, h.as_ref(), Side::Lower)
             .map_err(|_| GraphError::Singular)?;
         let rhs = Mat::from_fn(n, 1, |i, _| -b[i]);
         let x = llt.solve(&rhs);
