@@ -141,7 +141,7 @@ pub struct ReplayArgs {
     #[arg(long)]
     pub svg: Option<PathBuf>,
     /// Keep adding walls to the first-scan map as the robot explores: every key scan
-    /// ([slam] key_distance, key_angle) adds its lines at the filter's pose, so the
+    /// (key_distance, key_angle of the slam table) adds its lines at the filter's pose, so the
     /// filter keeps localizing after it leaves the first room.
     #[arg(long, conflicts_with_all = ["map", "global"])]
     pub grow_map: bool,

@@ -133,11 +133,8 @@ impl FrontEnd {
 
     /// The local map for key scan `k`: the key scans up to `local_map_path` behind it.
     fn local_map(&self, k: usize) -> LineMap {
-        let path = self.keys.get(k).path;
-        let first = (0..=k)
-            .find(|&j| path - self.keys.get(j).path <= self.params.local_map_path)
-            .unwrap_or(k);
-        self.keys.map_of(self.graph.poses(), first..=k, &self.mount)
+        let chain = self.keys.chain(k, self.params.local_map_path);
+        self.keys.map_of(self.graph.poses(), chain, &self.mount)
     }
 
     /// The edge from the previous key scan: the filter's relative pose, with the

@@ -73,10 +73,20 @@ impl KeyScans {
         self.keys.iter()
     }
 
-    /// The lines of key scan `k` and of the key scans up to `path` (m) of driving before
-    /// it, all in `k`'s sensor frame (placed by their poses in `poses`): one observation
-    /// with the walls of a few scans, for a search that one scan's few lines leave
-    /// ambiguous.
+    /// Key scan `k` and the key scans up to `path` (m) of driving before it.
+    pub fn chain(&self, k: usize, path: f64) -> std::ops::RangeInclusive<usize> {
+        let end = self.keys[k].path;
+        let first = (0..=k)
+            .rev()
+            .take_while(|&j| end - self.keys[j].path <= path)
+            .last()
+            .unwrap_or(k);
+        first..=k
+    }
+
+    /// The lines of the [`chain`](Self::chain) of key scan `k`, all in `k`'s sensor frame
+    /// (placed by their poses in `poses`): one observation with the walls of a few scans,
+    /// for a search that one scan's few lines leave ambiguous.
     pub fn chain_lines(
         &self,
         poses: &[Pose2<f64>],
@@ -85,10 +95,7 @@ impl KeyScans {
         mount: &Pose2<f64>,
     ) -> Vec<ObservedLine> {
         let here = poses[k].compose(mount).inverse();
-        let end = self.keys[k].path;
-        (0..=k)
-            .rev()
-            .take_while(|&j| end - self.keys[j].path <= path)
+        self.chain(k, path)
             .flat_map(|j| {
                 let sensor = here.compose(&poses[j].compose(mount));
                 self.keys[j].lines.iter().map(move |l| l.seen_from(&sensor))
@@ -107,15 +114,9 @@ impl KeyScans {
         path: f64,
         mount: &Pose2<f64>,
     ) -> Vec<ObservedLine> {
-        let end = self.keys[k].path;
-        let first = (0..=k)
-            .rev()
-            .take_while(|&j| end - self.keys[j].path <= path)
-            .last()
-            .unwrap_or(k);
         let here = poses[k].compose(mount).inverse();
         let nominal = nalgebra::Matrix2::new(1e-4, 0.0, 0.0, 0.5f64.to_radians().powi(2));
-        self.map_of(poses, first..=k, mount)
+        self.map_of(poses, self.chain(k, path), mount)
             .segments
             .iter()
             .filter_map(|wall| {

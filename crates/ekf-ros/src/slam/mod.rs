@@ -2,12 +2,12 @@
 //! (docs/ARCHITECTURE.md §3 "Maps without a reference").
 //!
 //! The log is replayed with the filter localizing in a map that it builds as it goes
-//! ([`front_end`]): key scans every `key_distance` or `key_angle`, each a node of a 2D
+//! ([`FrontEnd`]): key scans every `key_distance` or `key_angle`, each a node of a 2D
 //! pose graph ([`pose_graph`]) tied to the one before by the filter's relative pose. When
 //! the robot comes back to a place it mapped, the relocalization search finds the scan in
 //! a submap of the old key scans there, an EKF update on those walls refines the pose,
 //! and the next key scans must fit the same correction before the closure enters the
-//! graph ([`loop_closure`]); the graph is then optimised (Gauss–Newton, sparse Cholesky)
+//! graph (`slam/loop_closure.rs`); the graph is then optimised (Gauss–Newton, sparse Cholesky)
 //! and the filter restarted at the corrected pose. At the end every key scan's lines are
 //! fused at its optimised pose into the map ([`lrf_lines::MapBuilder`], as
 //! `--from-truth` does with the reference), and every scan's pose is corrected with its
