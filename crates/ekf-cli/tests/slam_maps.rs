@@ -125,3 +125,24 @@ fn slam_on_freiburg_101_without_its_reference() {
     let rmse = aligned_rmse(&outcome.trajectory, &bag);
     assert!(rmse <= 0.15, "{rmse} m");
 }
+
+#[test]
+fn a_log_that_breaks_off_is_mapped_up_to_the_damage_and_the_damage_is_reported() {
+    let dir = tempfile::tempdir().unwrap();
+    let whole =
+        std::fs::read(PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../testdata/aces.mcap"))
+            .unwrap();
+    let bag = dir.path().join("truncated.mcap");
+    std::fs::write(&bag, &whole[..whole.len() / 2]).unwrap();
+    let outcome = build_slam_map(&bag, &Config::default(), &mut |_, _| {}).unwrap();
+    let failure = outcome.failure.expect("the damage is reported").to_string();
+    assert!(
+        failure.contains("truncated.mcap") && failure.contains("byte"),
+        "{failure}"
+    );
+    // What came before the damage is mapped: about half the scans, every one with a pose.
+    let s = &outcome.summary;
+    assert!((150..=290).contains(&s.scans), "{s:?}");
+    assert_eq!(outcome.trajectory.len(), s.scans);
+    assert!(outcome.map.len() > 50, "{}", outcome.map.len());
+}
