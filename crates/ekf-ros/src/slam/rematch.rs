@@ -8,12 +8,13 @@ use ekf_fusion::Fuser;
 use lrf_lines::{fit_poses, LineMap, ObservedLine, RelocalizeParams};
 use nalgebra::{Matrix3, Vector3};
 
-/// A scan that the filter's pose does not explain (fewer than
-/// half its line length on walls of the local map, as the relocalization search
-/// scores it) is fused again with the covariance widened by `rematch_sigma_xy` and
-/// `rematch_sigma_theta`; if the pose it gives puts at least as many lines (and two)
-/// on walls and scores `min_margin` times better, it is kept, otherwise the filter is
-/// put back. Returns the new pose.
+/// A scan that the filter's pose does not explain (fewer than three lines or half its
+/// line length on walls of the local map, as the relocalization search scores it) is
+/// fused again with the covariance widened by `rematch_sigma_xy` and
+/// `rematch_sigma_theta` (the position only when a compass holds the heading); if the
+/// pose it gives puts at least as many lines (and two) on walls and scores `min_margin`
+/// times better (and, with a compass, half the line length), it is kept, otherwise the
+/// filter is put back. Returns the new pose.
 pub fn rematch(
     fuser: &mut Fuser,
     lines: &[ObservedLine],
@@ -36,7 +37,15 @@ pub fn rematch(
     if search.explains(before.inliers, before.score, observed) {
         return None;
     }
-    let (sxy, sth) = (params.rematch_sigma_xy, params.rematch_sigma_theta);
+    // With a compass the heading is held by it: only the position is widened, and a
+    // position found so must put half the scan's line length on walls (a position-only
+    // re-fit slides along walls easily; a turn that makes lines fit is rarer evidence).
+    let compass = fuser.mode().uses_compass();
+    let sth = match compass {
+        true => 0.0,
+        false => params.rematch_sigma_theta,
+    };
+    let sxy = params.rematch_sigma_xy;
     let widened =
         covariance + Matrix3::from_diagonal(&Vector3::new(sxy * sxy, sxy * sxy, sth * sth));
     let filter = fuser.localizer_mut();
@@ -45,7 +54,9 @@ pub fn rematch(
     let pose = filter.pose();
     let after = fit(filter.map(), pose).0;
     let better = after.is_some_and(|a| {
-        a.inliers >= before.inliers.max(2) && a.score >= search.min_margin * before.score
+        a.inliers >= before.inliers.max(2)
+            && a.score >= search.min_margin * before.score
+            && (!compass || a.score >= 0.5 * observed)
     });
     if refused || !better {
         filter.reset(here, covariance).ok()?;
