@@ -96,6 +96,9 @@ pub enum ReplayError {
         /// What the OS said.
         source: std::io::Error,
     },
+    /// `--grow-map` with a given map, global localization or another scan hook.
+    #[error("--grow-map grows the first scan's map: it cannot be combined with --map or --global")]
+    GrowMapNeedsFirstScan,
     /// The SLAM pose graph could not be built or solved.
     #[error("map build --slam: {0}")]
     Slam(String),

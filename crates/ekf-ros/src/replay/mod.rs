@@ -225,6 +225,12 @@ pub fn replay_with(
         motion_topic,
         (config.timing.max_lag * 1e9) as u64,
     )?;
+    // Growth needs the first-scan map and a filter without the loss monitor: a given
+    // map would be replaced by the grown one, and walls would be placed before a global
+    // search locked on.
+    if options.grow_map && (options.map.is_some() || options.global || hook.is_some()) {
+        return Err(ReplayError::GrowMapNeedsFirstScan);
+    }
     let mut growth = match options.grow_map {
         true => Some(crate::slam::MapGrowth::new(&config.slam)?),
         false => None,

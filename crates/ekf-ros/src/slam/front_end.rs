@@ -2,8 +2,8 @@
 //! a local map of the last key scans (so its error grows only with the path since them);
 //! a scan taken far enough from the last key scan becomes a key scan, tied to it in the
 //! pose graph by the filter's relative pose; loop closures found and confirmed
-//! ([`LoopClosures`]) are added and the graph optimised, and the filter restarted at its
-//! key scan's corrected pose.
+//! ([`LoopClosures`]) are added, and unless the graph already agrees with them it is
+//! optimised and the filter restarted at its key scan's corrected pose.
 
 use super::key_scans::{is_key, KeyScan, KeyScans};
 use super::loop_closure::{LoopClosures, Outcome};
@@ -193,7 +193,6 @@ impl ScanHook for FrontEnd {
             return Ok(false);
         }
         let k = self.keys.push(KeyScan {
-            t_ns: now,
             front: pose,
             lines,
             path: self.path,
@@ -230,7 +229,7 @@ impl ScanHook for FrontEnd {
                 fuser
                     .localizer_mut()
                     .reset(corrected, covariance)
-                    .map_err(|e| slam_error(e.to_string()))?;
+                    .map_err(slam_error)?;
                 self.keys.get_mut(k).front = corrected;
                 self.last_pose = Some(corrected);
             }

@@ -15,8 +15,6 @@ pub fn is_key(last: &Pose2<f64>, pose: &Pose2<f64>, params: &SlamParams) -> bool
 /// One key scan: a node of the pose graph.
 #[derive(Debug, Clone)]
 pub struct KeyScan {
-    /// The scan's stamp (ns).
-    pub t_ns: u64,
     /// The front end's pose at the scan, in the frame of the poses it estimated after it
     /// (the graph pose, when the front end was restarted there).
     pub front: Pose2<f64>,
@@ -66,11 +64,6 @@ impl KeyScans {
     /// None yet.
     pub fn is_empty(&self) -> bool {
         self.keys.is_empty()
-    }
-
-    /// The key scans, in order.
-    pub fn iter(&self) -> impl Iterator<Item = &KeyScan> {
-        self.keys.iter()
     }
 
     /// Key scan `k` and the key scans up to `path` (m) of driving before it.

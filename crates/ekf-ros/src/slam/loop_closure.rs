@@ -54,7 +54,8 @@ pub struct LoopClosures {
 pub enum Outcome {
     /// Nothing to add.
     Nothing,
-    /// A confirmed closure: add these edges and optimise.
+    /// A confirmed closure: add these edges (the front end optimises the graph at once
+    /// unless it already agrees with them).
     Closed(Vec<Edge>),
 }
 
@@ -186,10 +187,16 @@ impl LoopClosures {
             return Outcome::Nothing;
         };
         self.counts.hypotheses += 1;
+        let first = edge(anchor, k, &poses[anchor], &pose, information);
+        if self.params.verify_key_scans == 0 {
+            self.counts.closures += 1;
+            self.last_closure_path = path;
+            return Outcome::Closed(vec![first]);
+        }
         self.pending = Some(Pending {
             anchor,
             correction: pose.compose(&here.inverse()),
-            edges: vec![edge(anchor, k, &poses[anchor], &pose, information)],
+            edges: vec![first],
             submap,
         });
         Outcome::Nothing

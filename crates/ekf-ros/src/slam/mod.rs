@@ -7,8 +7,10 @@
 //! the robot comes back to a place it mapped, the relocalization search finds the scan in
 //! a submap of the old key scans there, an EKF update on those walls refines the pose,
 //! and the next key scans must fit the same correction before the closure enters the
-//! graph (`slam/loop_closure.rs`); the graph is then optimised (Gauss–Newton, sparse Cholesky)
-//! and the filter restarted at the corrected pose. At the end every key scan's lines are
+//! graph (`slam/loop_closure.rs`); unless the graph already agrees with it (its edges'
+//! cost within a chi-square bound), the graph is then optimised (Gauss–Newton, sparse
+//! Cholesky) and the filter restarted at the corrected pose; the rest wait for the
+//! optimisation at the end. At the end every key scan's lines are
 //! fused at its optimised pose into the map ([`lrf_lines::MapBuilder`], as
 //! `--from-truth` does with the reference), and every scan's pose is corrected with its
 //! key scan's. The reference topic is not read.
@@ -179,6 +181,19 @@ impl SlamParams {
                 check(key, value, Expected::Positive)?;
             }
         }
+        for (key, value) in [
+            ("map_builder.tolerance_rho", self.map_builder.tolerance_rho),
+            (
+                "map_builder.tolerance_beta",
+                self.map_builder.tolerance_beta,
+            ),
+            ("map_builder.max_gap", self.map_builder.max_gap),
+        ] {
+            check(key, value, Expected::MetresWithin(1e6))?;
+            if value < 0.0 {
+                check(key, value, Expected::Positive)?;
+            }
+        }
         check(
             "map_builder.gate_probability",
             self.map_builder.gate_probability,
@@ -194,7 +209,7 @@ pub struct SlamSummary {
     pub log: String,
     /// `laser` or `laser+compass`.
     pub mode: String,
-    /// Scans fused.
+    /// Scans with a corrected pose (those from the first key scan on).
     pub scans: usize,
     /// Key scans (graph nodes).
     pub key_scans: usize,
@@ -259,6 +274,9 @@ pub fn build_slam_map(
     progress: &mut dyn FnMut(u64, u64),
 ) -> Result<SlamOutcome, ReplayError> {
     let params = config.slam;
+    params
+        .validate()
+        .map_err(|e| ReplayError::Slam(e.in_table("slam").to_string()))?;
     let started = Instant::now();
     let mut config = config.clone();
     // Mapping must not see the reference: the topic is renamed away.
@@ -284,7 +302,9 @@ pub fn build_slam_map(
         ..ReplayOptions::default()
     };
     let outcome = replay_with(log, &config, &options, Some(&mut front), progress)?;
-    front.finish()?;
+    // A graph that cannot be solved at the end leaves the map of the last optimisation;
+    // the failure is reported with it.
+    let unsolved = front.finish().err();
     let map = front.map();
     let mut trajectory = Trajectory::default();
     for (t, pose) in front.corrected_scans() {
@@ -317,6 +337,6 @@ pub fn build_slam_map(
         map,
         trajectory,
         summary,
-        failure: outcome.failure,
+        failure: outcome.failure.or(unsolved),
     })
 }

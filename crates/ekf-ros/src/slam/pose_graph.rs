@@ -138,11 +138,6 @@ impl PoseGraph {
         &self.edges
     }
 
-    /// Moves node `i` (a new initial estimate for the nodes after a correction).
-    pub fn set_pose(&mut self, i: usize, pose: Pose2<f64>) {
-        self.poses[i] = pose;
-    }
-
     /// The weighted cost `Σ w eᵀ Ω e` at the current poses.
     pub fn cost(&self) -> f64 {
         self.edges

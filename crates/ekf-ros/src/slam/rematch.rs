@@ -14,7 +14,8 @@ use nalgebra::{Matrix3, Vector3};
 /// `rematch_sigma_theta` (the position only when a compass holds the heading); if the
 /// pose it gives puts at least as many lines (and two) on walls and scores `min_margin`
 /// times better (and, with a compass, half the line length), it is kept, otherwise the
-/// filter is put back. Returns the new pose.
+/// filter is put back (each restart forgets a compass lock-out, as any restart does).
+/// Returns the new pose.
 pub fn rematch(
     fuser: &mut Fuser,
     lines: &[ObservedLine],
