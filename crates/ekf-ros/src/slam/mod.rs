@@ -138,8 +138,8 @@ impl Default for SlamParams {
 }
 
 impl SlamParams {
-    /// Distances and standard deviations positive, angles in radians, probabilities of
-    /// the map builder in range.
+    /// Distances and standard deviations positive, angles in radians, rates, tolerances
+    /// and the map builder's gap not negative, its gate probability in (0, 1).
     pub fn validate(&self) -> Result<(), InvalidSetting> {
         for (key, value) in [
             ("key_distance", self.key_distance),
@@ -175,13 +175,6 @@ impl SlamParams {
                 "odometry_sigma_theta_per_rad",
                 self.odometry_sigma_theta_per_rad,
             ),
-        ] {
-            check(key, value, Expected::MetresWithin(1e6))?;
-            if value < 0.0 {
-                check(key, value, Expected::Positive)?;
-            }
-        }
-        for (key, value) in [
             ("map_builder.tolerance_rho", self.map_builder.tolerance_rho),
             (
                 "map_builder.tolerance_beta",
