@@ -86,18 +86,21 @@ impl LoopClosures {
     /// Checks the newest key scan `k` (graph poses in `poses`): confirms or refutes a
     /// pending hypothesis, or searches for a new one.
     pub fn check(&mut self, keys: &KeyScans, poses: &[Pose2<f64>], k: usize) -> Outcome {
-        let lines = &keys.chain_lines(
-            poses,
-            k,
-            self.params.chain_path,
-            &self.localizer.laser_mount,
-        );
+        // The chain's lines, made only for a key scan that confirms or refines a pose.
+        let chain_lines = || {
+            keys.chain_lines(
+                poses,
+                k,
+                self.params.chain_path,
+                &self.localizer.laser_mount,
+            )
+        };
         if let Some(mut pending) = self.pending.take() {
             let predicted = pending.correction.compose(&poses[k]);
             let confirmed = refine(
                 &self.params,
                 &self.localizer,
-                lines,
+                &chain_lines(),
                 &pending.submap,
                 &predicted,
             )
@@ -131,8 +134,10 @@ impl LoopClosures {
                 .min(self.params.loop_max_radius)
         };
         let here = poses[k];
+        // Key scans far enough behind to close a loop with.
+        let old = |j: &usize| path - keys.get(*j).path >= self.params.loop_min_path;
         let anchor = (0..k)
-            .filter(|&j| path - keys.get(j).path >= self.params.loop_min_path)
+            .filter(old)
             .map(|j| (j, distance(&poses[j], &here)))
             .filter(|&(j, d)| d <= reach(j))
             .min_by(|a, b| a.1.total_cmp(&b.1))
@@ -144,7 +149,7 @@ impl LoopClosures {
         // The old key scans nearest the anchor, at most `submap_max_keys`: a place
         // revisited many times does not make the search slower each time.
         let mut near: Vec<(usize, f64)> = (0..k)
-            .filter(|&j| path - keys.get(j).path >= self.params.loop_min_path)
+            .filter(old)
             .map(|j| (j, distance(&poses[j], &poses[anchor])))
             .filter(|&(_, d)| d <= self.params.submap_radius)
             .collect();
@@ -180,7 +185,7 @@ impl LoopClosures {
         let Some((pose, information)) = refine(
             &self.params,
             &self.localizer,
-            lines,
+            &chain_lines(),
             &submap,
             &found.best.pose,
         ) else {
