@@ -17,8 +17,8 @@ use crate::ros2::AnyMessage;
 use crate::trajectory::StampedPose;
 use ekf_core::Pose2;
 use ekf_fusion::{
-    consistency, Forecast, Fused, Fuser, Input, ScanFused, Skip, Step, TimedLocalizer, Tracking,
-    TrackingChange,
+    consistency, Forecast, Fused, Fuser, Input, Scan, ScanFused, Skip, Step, TimedLocalizer,
+    Tracking, TrackingChange,
 };
 use lrf_lines::{ScanStage, StageClock};
 use nalgebra::Matrix3;
@@ -626,7 +626,12 @@ impl<'a> Run<'a> {
                 self.heading(now, heading, &update)?
             }
             Fused::Position(_) => self.record_pose(now)?,
-            Fused::Scan(fused) => self.scan(now, &fused)?,
+            // A scan's update comes only from a scan input.
+            Fused::Scan(fused) => {
+                if let Input::Scan(scan) = &step.input {
+                    self.scan(now, &fused, scan)?
+                }
+            }
             Fused::ScanRefused(e) => {
                 self.flag(&channel.topic, *log_time, "scan_refused", e.to_string())?
             }
@@ -681,7 +686,7 @@ impl<'a> Run<'a> {
 
     /// A scan's update: the loss monitor's reports, then the map, the markers and the
     /// scan's diagnostics, then the pose.
-    fn scan(&mut self, now: u64, fused: &ScanFused) -> Result<(), ReplayError> {
+    fn scan(&mut self, now: u64, fused: &ScanFused, scan: &Scan) -> Result<(), ReplayError> {
         if fused.lost.is_some() {
             self.mark(now, ReplayEvent::Lost);
         }
@@ -702,7 +707,7 @@ impl<'a> Run<'a> {
             write_scan_outputs(out, now, fused, localizer, &mut self.map_written)?;
         }
         if let Some(hook) = self.hook.as_mut() {
-            if hook.scan_fused(now, fused, self.localizer.fuser_mut())? {
+            if hook.scan_fused(now, fused, scan, self.localizer.fuser_mut())? {
                 self.map_written = false;
             }
         }

@@ -1,6 +1,6 @@
 //! The SLAM front end, handed every fused scan by the replay loop: the filter localizes in
-//! a local map of the last key scans (so its error grows only with the path since them);
-//! a scan taken far enough from the last key scan becomes a key scan, tied to it in the
+//! a local map of the last key scans (so its error grows only with the path since them),
+//! and without a compass each scan's points are aligned to theirs ([`align`]); a scan taken far enough from the last key scan becomes a key scan, tied to it in the
 //! pose graph by the filter's relative pose; loop closures found and confirmed
 //! ([`LoopClosures`]) are added, and unless the graph already agrees with them it is
 //! optimised and the filter restarted at its key scan's corrected pose.
@@ -9,10 +9,11 @@ use super::key_scans::{is_key, KeyScan, KeyScans};
 use super::loop_closure::{LoopClosures, Outcome};
 use super::pose_graph::{relative, Edge, PoseGraph};
 use super::rematch::rematch;
+use super::scan_match::{align, ReferenceCloud, ScanPoints};
 use super::SlamParams;
 use crate::replay::{ReplayError, ScanHook};
 use ekf_core::Pose2;
-use ekf_fusion::{Fuser, ScanFused};
+use ekf_fusion::{Fuser, Scan, ScanFused};
 use lrf_lines::{LineMap, LocalizerConfig};
 use nalgebra::{Matrix3, Vector3};
 
@@ -51,13 +52,25 @@ pub struct FrontEnd {
     unoptimized: bool,
     /// Scans fused again with a widened covariance ([`rematch`]).
     pub(super) rematched: u64,
+    /// The points of the local map's key scans, for the scan matcher.
+    cloud: ReferenceCloud,
+    /// Scans whose pose the scan matcher corrected.
+    pub(super) aligned: u64,
+    /// Whether each scan's points are aligned to the local map's (without a compass).
+    align_scans: bool,
 }
 
 impl FrontEnd {
     /// A front end with `params`, its localizer configured as `localizer` (laser mount,
-    /// matching) for the loop closures' refinement.
-    pub fn new(params: SlamParams, localizer: LocalizerConfig) -> Self {
+    /// matching) for the loop closures' refinement; `align_scans`: each scan's points are
+    /// aligned to the local map's. Without a compass the lines alone let the heading
+    /// drift (edmonton: 5.4° RMS heading error without the alignment, 2.2° with it); with
+    /// one the compass holds it, and the alignment, which slides along a corridor by a
+    /// few centimetres a scan, only adds drift (simulated two-rooms: 0.016 m without,
+    /// 1.9 m with).
+    pub fn new(params: SlamParams, localizer: LocalizerConfig, align_scans: bool) -> Self {
         Self {
+            align_scans,
             mount: localizer.laser_mount,
             keys: KeyScans::new(params.map_builder),
             graph: PoseGraph::new(),
@@ -70,6 +83,8 @@ impl FrontEnd {
             optimizations: 0,
             unoptimized: false,
             rematched: 0,
+            cloud: ReferenceCloud::default(),
+            aligned: 0,
         }
     }
 
@@ -131,10 +146,16 @@ impl FrontEnd {
             .map_of(self.graph.poses(), 0..self.keys.len(), &self.mount)
     }
 
-    /// The local map for key scan `k`: the key scans up to `local_map_path` behind it.
-    fn local_map(&self, k: usize) -> LineMap {
+    /// The local map for key scan `k`: the key scans up to `local_map_path` behind it,
+    /// as walls and as points.
+    fn local_map(&self, k: usize) -> (LineMap, ReferenceCloud) {
         let chain = self.keys.chain(k, self.params.local_map_path);
-        self.keys.map_of(self.graph.poses(), chain, &self.mount)
+        let poses = self.graph.poses();
+        (
+            self.keys.map_of(poses, chain.clone(), &self.mount),
+            self.keys
+                .cloud_of(poses, chain, self.params.scan_match.max_distance),
+        )
     }
 
     /// The edge from the previous key scan: the filter's relative pose, with the
@@ -164,16 +185,31 @@ impl ScanHook for FrontEnd {
         &mut self,
         now: u64,
         _fused: &ScanFused,
+        scan: &Scan,
         fuser: &mut Fuser,
     ) -> Result<bool, ReplayError> {
         let lines = fuser.localizer().last_lines().to_vec();
-        let pose = match rematch(fuser, &lines, &self.params) {
+        let mut pose = match rematch(fuser, &lines, &self.params) {
             Some(pose) => {
                 self.rematched += 1;
                 pose
             }
             None => fuser.localizer().pose(),
         };
+        let points = ScanPoints::from_scan(scan, &self.mount);
+        let aligned = match self.align_scans {
+            true => align(&self.cloud, &points, pose, &self.params.scan_match),
+            false => None,
+        };
+        if let Some(aligned) = aligned {
+            let covariance = *fuser.localizer().covariance();
+            fuser
+                .localizer_mut()
+                .reset(aligned.pose, covariance)
+                .map_err(slam_error)?;
+            pose = aligned.pose;
+            self.aligned += 1;
+        }
         if let Some(last) = self.last_pose.replace(pose) {
             self.path += (pose.x - last.x).hypot(pose.y - last.y);
         }
@@ -195,6 +231,7 @@ impl ScanHook for FrontEnd {
         let k = self.keys.push(KeyScan {
             front: pose,
             lines,
+            points,
             path: self.path,
         });
         match previous {
@@ -239,8 +276,9 @@ impl ScanHook for FrontEnd {
             front: self.keys.get(k).front,
             key: k,
         });
-        let local = self.local_map(k);
+        let (local, cloud) = self.local_map(k);
         fuser.localizer_mut().replace_map(local);
+        self.cloud = cloud;
         Ok(true)
     }
 }

@@ -8,7 +8,7 @@ use super::key_scans::is_key;
 use super::SlamParams;
 use crate::replay::{ReplayError, ScanHook};
 use ekf_core::Pose2;
-use ekf_fusion::{Fuser, ScanFused};
+use ekf_fusion::{Fuser, Scan, ScanFused};
 use lrf_lines::{LineMap, LocalizerError, MapBuilder};
 
 /// The growing map (a [`ScanHook`]).
@@ -50,6 +50,7 @@ impl ScanHook for MapGrowth {
         &mut self,
         _now: u64,
         _fused: &ScanFused,
+        _scan: &Scan,
         fuser: &mut Fuser,
     ) -> Result<bool, ReplayError> {
         let filter = fuser.localizer();

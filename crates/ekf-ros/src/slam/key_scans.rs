@@ -1,6 +1,7 @@
 //! The key scans of a SLAM run: the lines each saw (sensor frame), when, and how far the
 //! robot had driven; maps are built from any set of them at their graph poses.
 
+use super::scan_match::{ReferenceCloud, ScanPoints};
 use super::SlamParams;
 use ekf_core::{angle_diff, Pose2};
 use lrf_lines::{LineMap, MapBuilder, MapBuilderParams, ObservedLine};
@@ -20,6 +21,8 @@ pub struct KeyScan {
     pub front: Pose2<f64>,
     /// The scan's lines, sensor frame.
     pub lines: Vec<ObservedLine>,
+    /// The scan's points, robot frame.
+    pub points: ScanPoints,
     /// Path length driven up to the scan (m).
     pub path: f64,
 }
@@ -64,6 +67,29 @@ impl KeyScans {
     /// None yet.
     pub fn is_empty(&self) -> bool {
         self.keys.is_empty()
+    }
+
+    /// The points of the key scans `which`, each placed at its pose in `poses`.
+    pub fn cloud_of(
+        &self,
+        poses: &[Pose2<f64>],
+        which: impl IntoIterator<Item = usize>,
+        cell: f64,
+    ) -> ReferenceCloud {
+        ReferenceCloud::new(
+            which.into_iter().map(|k| (poses[k], &self.keys[k].points)),
+            cell,
+        )
+    }
+
+    /// The points of the [`chain`](Self::chain) of key scan `k`, all in `k`'s robot frame
+    /// (placed by their poses in `poses`).
+    pub fn chain_points(&self, poses: &[Pose2<f64>], k: usize, path: f64) -> ScanPoints {
+        let here = poses[k].inverse();
+        ScanPoints::merged(
+            self.chain(k, path)
+                .map(|j| (here.compose(&poses[j]), &self.keys[j].points)),
+        )
     }
 
     /// Key scan `k` and the key scans up to `path` (m) of driving before it.

@@ -4,7 +4,9 @@
 //! after it fit the same correction ([`LoopClosures`]).
 
 use super::key_scans::KeyScans;
+use super::point_search::{search, PointSearch};
 use super::pose_graph::{relative, Edge};
+use super::scan_match::{align, ReferenceCloud};
 use super::SlamParams;
 use ekf_core::{angle_diff, Pose2};
 use lrf_lines::{
@@ -17,8 +19,10 @@ use nalgebra::{Matrix3, Vector3};
 struct Pending {
     /// The old key scan the submap is anchored at.
     anchor: usize,
-    /// The submap (old key scans near the anchor, at their graph poses).
+    /// The submap (old key scans near the anchor, at their graph poses) ...
     submap: LineMap,
+    /// ... and its points.
+    cloud: ReferenceCloud,
     /// World-frame correction `C` with `C ⊕ x_k` the pose found for key scan `k`.
     correction: Pose2<f64>,
     /// The edges found so far, anchor → key scan.
@@ -86,25 +90,11 @@ impl LoopClosures {
     /// Checks the newest key scan `k` (graph poses in `poses`): confirms or refutes a
     /// pending hypothesis, or searches for a new one.
     pub fn check(&mut self, keys: &KeyScans, poses: &[Pose2<f64>], k: usize) -> Outcome {
-        // The chain's lines, made only for a key scan that confirms or refines a pose.
-        let chain_lines = || {
-            keys.chain_lines(
-                poses,
-                k,
-                self.params.chain_path,
-                &self.localizer.laser_mount,
-            )
-        };
         if let Some(mut pending) = self.pending.take() {
             let predicted = pending.correction.compose(&poses[k]);
-            let confirmed = refine(
-                &self.params,
-                &self.localizer,
-                &chain_lines(),
-                &pending.submap,
-                &predicted,
-            )
-            .filter(|(pose, _)| close(pose, &predicted, &self.params));
+            let confirmed = self
+                .refine_chain(keys, poses, k, &pending.submap, &pending.cloud, &predicted)
+                .filter(|(pose, _)| close(pose, &predicted, &self.params));
             let Some((pose, information)) = confirmed else {
                 self.counts.refuted += 1;
                 return Outcome::Nothing;
@@ -164,13 +154,19 @@ impl LoopClosures {
             center: nalgebra::Point2::new(here.x, here.y),
             radius: reach(anchor),
         };
+        let cloud = keys.cloud_of(
+            poses,
+            near.iter().map(|&(j, _)| j),
+            self.params.scan_match.max_distance,
+        );
         let walls = keys.chain_walls(
             poses,
             k,
             self.params.chain_path,
             &self.localizer.laser_mount,
         );
-        let found = relocalize(
+        // The walls first; where they find nothing unambiguous, the points.
+        let by_walls = relocalize(
             &walls,
             &submap,
             &self.localizer.laser_mount,
@@ -178,17 +174,26 @@ impl LoopClosures {
             &self.relocalize,
         )
         .filter(|r| r.is_unambiguous(&self.relocalize))
-        .filter(|r| angle_diff(r.best.pose.theta, here.theta).abs() <= self.params.loop_max_turn);
+        .map(|r| r.best.pose)
+        .filter(|pose| angle_diff(pose.theta, here.theta).abs() <= self.params.loop_max_turn);
+        let found = by_walls.or_else(|| {
+            let window = PointSearch {
+                center: here,
+                radius: window.radius,
+                max_turn: self.params.loop_max_turn,
+                min_share: self.params.point_search_min_share,
+                min_margin: self.relocalize.min_margin,
+                distinct_distance: self.relocalize.distinct_distance,
+                distinct_angle: self.relocalize.distinct_angle,
+            };
+            let points = keys.chain_points(poses, k, self.params.chain_path);
+            search(&cloud, &points, &window, &self.params.scan_match)
+        });
         let Some(found) = found else {
             return Outcome::Nothing;
         };
-        let Some((pose, information)) = refine(
-            &self.params,
-            &self.localizer,
-            &chain_lines(),
-            &submap,
-            &found.best.pose,
-        ) else {
+        let Some((pose, information)) = self.refine_chain(keys, poses, k, &submap, &cloud, &found)
+        else {
             return Outcome::Nothing;
         };
         self.counts.hypotheses += 1;
@@ -203,8 +208,30 @@ impl LoopClosures {
             correction: pose.compose(&here.inverse()),
             edges: vec![first],
             submap,
+            cloud,
         });
         Outcome::Nothing
+    }
+
+    /// The pose of key scan `k` in the submap (`submap`, its points `cloud`) from
+    /// `start`: the chain's lines [`refine`]d on the submap's walls, then the chain's
+    /// points aligned to the submap's ([`align`]) where enough of them match; with the
+    /// information the lines gave.
+    fn refine_chain(
+        &self,
+        keys: &KeyScans,
+        poses: &[Pose2<f64>],
+        k: usize,
+        submap: &LineMap,
+        cloud: &ReferenceCloud,
+        start: &Pose2<f64>,
+    ) -> Option<(Pose2<f64>, Matrix3<f64>)> {
+        let path = self.params.chain_path;
+        let lines = keys.chain_lines(poses, k, path, &self.localizer.laser_mount);
+        let (pose, information) = refine(&self.params, &self.localizer, &lines, submap, start)?;
+        let points = keys.chain_points(poses, k, path);
+        let pose = align(cloud, &points, pose, &self.params.scan_match).map_or(pose, |a| a.pose);
+        Some((pose, information))
     }
 }
 

@@ -19,8 +19,12 @@ mod front_end;
 mod growth;
 mod key_scans;
 mod loop_closure;
+mod point_search;
 pub mod pose_graph;
 mod rematch;
+mod scan_match;
+
+pub use scan_match::MatchParams;
 
 pub use front_end::FrontEnd;
 pub use growth::MapGrowth;
@@ -90,6 +94,9 @@ pub struct SlamParams {
     pub rematch_sigma_theta: f64,
     /// Fewest lines that must fuse in a refinement.
     pub min_loop_lines: usize,
+    /// Where the walls find no loop closure, the points search for one: the best pose
+    /// must match this share of the chain's points.
+    pub point_search_min_share: f64,
     /// Odometry edge: position standard deviation per key step (m) ...
     pub odometry_sigma_xy: f64,
     /// ... plus this per metre of the step.
@@ -102,6 +109,9 @@ pub struct SlamParams {
     pub max_iterations: usize,
     /// How the key scans' lines are fused into walls.
     pub map_builder: MapBuilderParams,
+    /// The scan matcher that corrects each scan's pose, and each loop closure's, with the
+    /// scan's points.
+    pub scan_match: MatchParams,
 }
 
 impl Default for SlamParams {
@@ -127,19 +137,23 @@ impl Default for SlamParams {
             rematch_sigma_xy: 0.3,
             rematch_sigma_theta: 0.15,
             min_loop_lines: 3,
+            point_search_min_share: 0.6,
             odometry_sigma_xy: 0.02,
             odometry_sigma_xy_per_m: 0.03,
             odometry_sigma_theta: 0.3f64.to_radians(),
             odometry_sigma_theta_per_rad: 0.03,
             max_iterations: 20,
             map_builder: MapBuilderParams::default(),
+            scan_match: MatchParams::default(),
         }
     }
 }
 
 impl SlamParams {
     /// Distances and standard deviations positive, angles in radians, rates, tolerances
-    /// and the map builder's gap not negative, its gate probability in (0, 1).
+    /// and the map builder's gap not negative, its gate probability and the point
+    /// search's share in (0, 1), the scan matcher's settings
+    /// ([`MatchParams::validate`]).
     pub fn validate(&self) -> Result<(), InvalidSetting> {
         for (key, value) in [
             ("key_distance", self.key_distance),
@@ -188,10 +202,16 @@ impl SlamParams {
             }
         }
         check(
+            "point_search_min_share",
+            self.point_search_min_share,
+            Expected::Probability,
+        )?;
+        check(
             "map_builder.gate_probability",
             self.map_builder.gate_probability,
             Expected::Probability,
-        )
+        )?;
+        self.scan_match.validate()
     }
 }
 
@@ -219,6 +239,9 @@ pub struct SlamSummary {
     /// Scans the front end re-matched in its local map (odometry that erred more than
     /// the filter allowed).
     pub rematched: u64,
+    /// Scans whose pose the scan matcher corrected (their points aligned to the local
+    /// map's).
+    pub aligned: u64,
     /// Segments in the map.
     pub segments: usize,
     /// Wall time of the build (s).
@@ -231,7 +254,7 @@ impl std::fmt::Display for SlamSummary {
         writeln!(
             f,
             "{} segments from {} key scans of {} ({:.0} m driven); {} loop closures \
-             ({} hypotheses, {} refuted); {} scans re-matched; {:.2} s",
+             ({} hypotheses, {} refuted); {} scans re-matched, {} aligned; {:.2} s",
             self.segments,
             self.key_scans,
             self.scans,
@@ -240,6 +263,7 @@ impl std::fmt::Display for SlamSummary {
             self.loops.hypotheses,
             self.loops.refuted,
             self.rematched,
+            self.aligned,
             self.wall_time_s
         )
     }
@@ -289,7 +313,7 @@ pub fn build_slam_map(
     drop(bag);
     let mut localizer = config.localizer.clone();
     localizer.laser_mount = mount;
-    let mut front = FrontEnd::new(params, localizer);
+    let mut front = FrontEnd::new(params, localizer, mode == Mode::Laser);
     let options = ReplayOptions {
         mode,
         ..ReplayOptions::default()
@@ -314,6 +338,7 @@ pub fn build_slam_map(
         optimizations: front.optimizations,
         graph_iterations: front.iterations,
         rematched: front.rematched,
+        aligned: front.aligned,
         segments: map.len(),
         wall_time_s: started.elapsed().as_secs_f64(),
     };

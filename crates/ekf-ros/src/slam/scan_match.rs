@@ -1,0 +1,508 @@
+//! Point-to-line ICP of a scan's points against the points of the key scans near it: the
+//! SLAM front end's correction of the filter's pose (docs/maps.md, "Building a map
+//! without a reference").
+//!
+//! A line update moves the pose by what a scan's few extracted lines say; on ranges
+//! rounded to a few centimetres a short line's direction is off by a degree or more, and
+//! a map grown from the filter's poses keeps every such error, so the heading drifts.
+//! Every beam of the scan, matched to the surface the earlier scans saw there, pins the
+//! pose down far better: the residual of point `pᵢ` (robot frame) against its nearest
+//! reference point `qᵢ` with surface normal `nᵢ` is `rᵢ = nᵢ·(R(θ)pᵢ + t − qᵢ)` (Censi's
+//! point-to-line metric), and the pose minimises
+//! `Σ ρ(rᵢ²/σ²) + (x − x₀)ᵀ P₀⁻¹ (x − x₀)`, `ρ` Huber's and `P₀` a weak prior around the
+//! filter's pose that holds the directions the points do not constrain (along a
+//! corridor) where the filter had them.
+
+use ekf_core::setting::{check, Expected, InvalidSetting};
+use ekf_core::{angle_diff, Pose2};
+use ekf_fusion::Scan;
+use nalgebra::{Matrix2, Matrix3, SymmetricEigen, Vector2, Vector3};
+use std::collections::HashSet;
+
+/// Beams on each side of a point whose points fit its surface normal.
+const NORMAL_HALF_WINDOW: usize = 3;
+/// Points farther than this (m) from the point do not fit its normal.
+const NORMAL_RADIUS: f64 = 0.5;
+/// The surface is a line if its points' spread across it is at most this (m, one σ).
+const NORMAL_MAX_THICKNESS: f64 = 0.03;
+
+/// The reference keeps one point per square of this size (m), the first seen: key scans
+/// that overlap do not multiply the points a match searches through.
+const REFERENCE_VOXEL: f64 = 0.05;
+
+/// The settings of the scan matcher (`[slam.scan_match]`).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct MatchParams {
+    /// A point farther than this (m) from every reference point is not matched.
+    pub max_distance: f64,
+    /// Standard deviation (m) of a point's distance to its surface: the range noise and
+    /// the reference's own.
+    pub sigma: f64,
+    /// Prior standard deviation (m) of the filter's position ...
+    pub prior_sigma_xy: f64,
+    /// ... and heading (rad).
+    pub prior_sigma_theta: f64,
+    /// Gauss–Newton iterations at most.
+    pub max_iterations: usize,
+    /// Share of the scan's points that must be matched for the result to stand.
+    pub min_matched_share: f64,
+}
+
+impl Default for MatchParams {
+    /// A laser of a few centimetres' range noise, matched within 0.3 m of where the filter
+    /// put it.
+    fn default() -> Self {
+        Self {
+            max_distance: 0.3,
+            sigma: 0.05,
+            prior_sigma_xy: 0.3,
+            prior_sigma_theta: 0.15,
+            max_iterations: 20,
+            min_matched_share: 0.3,
+        }
+    }
+}
+
+impl MatchParams {
+    /// Distances, standard deviations and the iteration count positive, the prior's
+    /// heading in radians, the matched share a probability (a share in (0, 1)).
+    pub fn validate(&self) -> Result<(), InvalidSetting> {
+        for (key, value) in [
+            ("scan_match.max_distance", self.max_distance),
+            ("scan_match.sigma", self.sigma),
+            ("scan_match.prior_sigma_xy", self.prior_sigma_xy),
+            ("scan_match.prior_sigma_theta", self.prior_sigma_theta),
+            ("scan_match.max_iterations", self.max_iterations as f64),
+        ] {
+            check(key, value, Expected::Positive)?;
+        }
+        check(
+            "scan_match.prior_sigma_theta",
+            self.prior_sigma_theta,
+            Expected::Radians,
+        )?;
+        check(
+            "scan_match.min_matched_share",
+            self.min_matched_share,
+            Expected::Probability,
+        )
+    }
+}
+
+/// A scan's points (robot frame), each with its surface normal where its neighbours
+/// along the scan lie on a line.
+#[derive(Debug, Clone, Default)]
+pub struct ScanPoints {
+    points: Vec<Vector2<f64>>,
+    normals: Vec<Option<Vector2<f64>>>,
+}
+
+impl ScanPoints {
+    /// The valid beams of `scan`, placed in the robot frame by the laser's `mount`.
+    pub fn from_scan(scan: &Scan, mount: &Pose2<f64>) -> Self {
+        let as_scan = scan.as_scan();
+        let points: Vec<Vector2<f64>> = scan
+            .ranges
+            .iter()
+            .enumerate()
+            .filter(|(_, &r)| as_scan.is_valid(r))
+            .map(|(i, &r)| {
+                let (s, c) = as_scan.beam_angle(i).sin_cos();
+                let r = f64::from(r);
+                let p = mount.transform_point(&nalgebra::Point2::new(r * c, r * s));
+                Vector2::new(p.x, p.y)
+            })
+            .collect();
+        Self::from_points(points)
+    }
+
+    /// Points in scan order, each with the normal its neighbours give.
+    fn from_points(points: Vec<Vector2<f64>>) -> Self {
+        let normals = (0..points.len())
+            .map(|i| surface_normal(&points, i))
+            .collect();
+        Self { points, normals }
+    }
+
+    /// The points of several scans in one frame, each `(pose, scan)` placed at `pose`
+    /// (its robot frame in that frame).
+    pub fn merged<'a>(scans: impl IntoIterator<Item = (Pose2<f64>, &'a ScanPoints)>) -> Self {
+        let mut merged = Self::default();
+        for (pose, scan) in scans {
+            for (p, n) in scan.placed(&pose) {
+                merged.points.push(p);
+                merged.normals.push(n);
+            }
+        }
+        merged
+    }
+
+    /// The points and normals moved by `pose` (a point `p` goes to `R(θ)p + t`).
+    fn placed(
+        &self,
+        pose: &Pose2<f64>,
+    ) -> impl Iterator<Item = (Vector2<f64>, Option<Vector2<f64>>)> + '_ {
+        let (s, c) = pose.theta.sin_cos();
+        let rotation = Matrix2::new(c, -s, s, c);
+        let t = Vector2::new(pose.x, pose.y);
+        self.points
+            .iter()
+            .zip(&self.normals)
+            .map(move |(p, n)| (rotation * p + t, n.map(|n| rotation * n)))
+    }
+
+    /// How many points.
+    pub fn len(&self) -> usize {
+        self.points.len()
+    }
+
+    /// The points (robot frame).
+    pub fn points(&self) -> &[Vector2<f64>] {
+        &self.points
+    }
+
+    /// No points.
+    pub fn is_empty(&self) -> bool {
+        self.points.is_empty()
+    }
+}
+
+/// The normal of the line through point `i` and its neighbours along the scan within
+/// [`NORMAL_RADIUS`] (the smallest eigenvector of their scatter), if they are at least
+/// three and lie on a line to [`NORMAL_MAX_THICKNESS`].
+fn surface_normal(points: &[Vector2<f64>], i: usize) -> Option<Vector2<f64>> {
+    let lo = i.saturating_sub(NORMAL_HALF_WINDOW);
+    let hi = (i + NORMAL_HALF_WINDOW + 1).min(points.len());
+    let near: Vec<&Vector2<f64>> = points[lo..hi]
+        .iter()
+        .filter(|p| (*p - points[i]).norm() <= NORMAL_RADIUS)
+        .collect();
+    if near.len() < 3 {
+        return None;
+    }
+    let mean = near.iter().fold(Vector2::zeros(), |a, p| a + *p) / near.len() as f64;
+    let scatter = near.iter().fold(Matrix2::zeros(), |a, p| {
+        let d = *p - mean;
+        a + d * d.transpose()
+    }) / near.len() as f64;
+    let eigen = SymmetricEigen::new(scatter);
+    let (small, large) = match eigen.eigenvalues[0] <= eigen.eigenvalues[1] {
+        true => (0, 1),
+        false => (1, 0),
+    };
+    let thin = eigen.eigenvalues[small].max(0.0).sqrt() <= NORMAL_MAX_THICKNESS;
+    let long = eigen.eigenvalues[large] > 0.0;
+    (thin && long).then(|| eigen.eigenvectors.column(small).into_owned())
+}
+
+/// A point and the normal of the surface it lies on.
+type Surface = (Vector2<f64>, Vector2<f64>);
+
+/// Reference points with normals (map frame), sorted by the cell of a grid over their
+/// bounding box so that the nearest one is looked for in nine cells.
+#[derive(Debug, Clone, Default)]
+pub struct ReferenceCloud {
+    /// The points and their normals, those of each cell together (row by row).
+    points: Vec<Surface>,
+    cell: f64,
+    /// The grid's first cell (cell coordinates) ...
+    origin: (i64, i64),
+    /// ... and its size in cells.
+    width: usize,
+    height: usize,
+    /// Cell `c`'s points are `points[starts[c]..starts[c + 1]]`.
+    starts: Vec<u32>,
+}
+
+impl ReferenceCloud {
+    /// The points with a normal of each `(pose, scan)`, placed at the pose, one per
+    /// [`REFERENCE_VOXEL`]; grid cells of `cell` (m), the largest distance a match is
+    /// looked for at.
+    pub fn new<'a>(
+        scans: impl IntoIterator<Item = (Pose2<f64>, &'a ScanPoints)>,
+        cell: f64,
+    ) -> Self {
+        let mut voxels = HashSet::new();
+        let mut points = Vec::new();
+        for (pose, scan) in scans {
+            for (q, n) in scan.placed(&pose) {
+                let Some(n) = n else { continue };
+                if voxels.insert(cell_of(&q, REFERENCE_VOXEL)) {
+                    points.push((q, n));
+                }
+            }
+        }
+        let keys: Vec<(i64, i64)> = points.iter().map(|(q, _)| cell_of(q, cell)).collect();
+        let (Some(x0), Some(y0), Some(x1), Some(y1)) = (
+            keys.iter().map(|k| k.0).min(),
+            keys.iter().map(|k| k.1).min(),
+            keys.iter().map(|k| k.0).max(),
+            keys.iter().map(|k| k.1).max(),
+        ) else {
+            return Self::default();
+        };
+        let (width, height) = ((x1 - x0 + 1) as usize, (y1 - y0 + 1) as usize);
+        let index = |k: &(i64, i64)| (k.1 - y0) as usize * width + (k.0 - x0) as usize;
+        let mut order: Vec<usize> = (0..points.len()).collect();
+        order.sort_by_key(|&i| index(&keys[i]));
+        let mut starts = vec![0u32; width * height + 1];
+        for k in &keys {
+            starts[index(k) + 1] += 1;
+        }
+        for c in 0..width * height {
+            starts[c + 1] += starts[c];
+        }
+        Self {
+            points: order.iter().map(|&i| points[i]).collect(),
+            cell,
+            origin: (x0, y0),
+            width,
+            height,
+            starts,
+        }
+    }
+
+    /// How many points.
+    pub fn len(&self) -> usize {
+        self.points.len()
+    }
+
+    /// The points (map frame).
+    pub fn points(&self) -> impl Iterator<Item = &Vector2<f64>> {
+        self.points.iter().map(|(q, _)| q)
+    }
+
+    /// The points of cell `(cx, cy)` (cell coordinates); none outside the grid.
+    fn in_cell(&self, cx: i64, cy: i64) -> &[Surface] {
+        let (ix, iy) = (cx - self.origin.0, cy - self.origin.1);
+        if ix < 0 || iy < 0 || ix as usize >= self.width || iy as usize >= self.height {
+            return &[];
+        }
+        let c = iy as usize * self.width + ix as usize;
+        &self.points[self.starts[c] as usize..self.starts[c + 1] as usize]
+    }
+
+    /// The nearest reference point within the cell size of `p`.
+    fn nearest(&self, p: &Vector2<f64>) -> Option<&Surface> {
+        let (cx, cy) = cell_of(p, self.cell);
+        let mut best: Option<(f64, &Surface)> = None;
+        for dy in -1..=1 {
+            for dx in -1..=1 {
+                for point in self.in_cell(cx + dx, cy + dy) {
+                    let d = (point.0 - p).norm_squared();
+                    if d <= self.cell * self.cell && best.is_none_or(|(b, _)| d < b) {
+                        best = Some((d, point));
+                    }
+                }
+            }
+        }
+        best.map(|(_, point)| point)
+    }
+}
+
+/// The cell of size `cell` (m) that holds `p`, in cell coordinates (exact: map
+/// coordinates are far below 2⁵³ cells).
+pub(super) fn cell_of(p: &Vector2<f64>, cell: f64) -> (i64, i64) {
+    ((p.x / cell).floor() as i64, (p.y / cell).floor() as i64)
+}
+
+/// The outcome of [`align`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Alignment {
+    /// The robot's pose that puts the scan's points on the reference surfaces.
+    pub pose: Pose2<f64>,
+    /// Points matched at that pose.
+    pub matched: usize,
+    /// The information matrix of the points' residuals at the pose (without the prior).
+    pub information: Matrix3<f64>,
+}
+
+/// Aligns `scan` (robot frame) to `reference` starting from `initial` (see the module
+/// documentation): Gauss–Newton with Huber weights (`k = 2σ`), the matches found again at
+/// each iteration. `None` if too few points match or the solve fails.
+pub fn align(
+    reference: &ReferenceCloud,
+    scan: &ScanPoints,
+    initial: Pose2<f64>,
+    params: &MatchParams,
+) -> Option<Alignment> {
+    if scan.is_empty() || reference.len() == 0 {
+        return None;
+    }
+    let prior = Matrix3::from_diagonal(&Vector3::new(
+        params.prior_sigma_xy.powi(-2),
+        params.prior_sigma_xy.powi(-2),
+        params.prior_sigma_theta.powi(-2),
+    ));
+    let huber = 2.0 * params.sigma;
+    let mut x = Vector3::new(initial.x, initial.y, initial.theta);
+    let mut result = None;
+    for _ in 0..params.max_iterations {
+        let (s, c) = x.z.sin_cos();
+        let rotation = Matrix2::new(c, -s, s, c);
+        let t = Vector2::new(x.x, x.y);
+        let mut information = Matrix3::zeros();
+        let mut gradient = Vector3::zeros();
+        let mut matched = 0;
+        for p in &scan.points {
+            let w = rotation * p + t;
+            let Some((q, n)) = reference.nearest(&w) else {
+                continue;
+            };
+            matched += 1;
+            let r = n.dot(&(w - q));
+            // ∂w/∂θ = R'(θ) p.
+            let dw = Vector2::new(-s * p.x - c * p.y, c * p.x - s * p.y);
+            let j = Vector3::new(n.x, n.y, n.dot(&dw));
+            let weight = match r.abs() <= huber {
+                true => 1.0,
+                false => huber / r.abs(),
+            } / (params.sigma * params.sigma);
+            information += weight * j * j.transpose();
+            gradient += weight * r * j;
+        }
+        if (matched as f64) < params.min_matched_share * scan.len() as f64 {
+            return None;
+        }
+        let offset = Vector3::new(
+            x.x - initial.x,
+            x.y - initial.y,
+            angle_diff(x.z, initial.theta),
+        );
+        let step = (information + prior)
+            .cholesky()?
+            .solve(&-(gradient + prior * offset));
+        x += step;
+        result = Some(Alignment {
+            pose: Pose2::new(x.x, x.y, ekf_core::wrap_angle(x.z)),
+            matched,
+            information,
+        });
+        if step.xy().norm() < 1e-4 && step.z.abs() < 1e-5 {
+            break;
+        }
+    }
+    result
+}
+
+#[cfg(test)]
+pub(super) mod tests {
+    use super::*;
+
+    /// A wall from one end to the other.
+    pub(in crate::slam) type Wall = ((f64, f64), (f64, f64));
+
+    /// Points every 2 cm along the walls, in order.
+    pub(in crate::slam) fn walls(segments: &[Wall]) -> Vec<Vector2<f64>> {
+        segments
+            .iter()
+            .flat_map(|&((x0, y0), (x1, y1))| {
+                let n = ((x1 - x0).hypot(y1 - y0) / 0.02).round() as usize;
+                (0..=n).map(move |i| {
+                    let f = i as f64 / n as f64;
+                    Vector2::new(x0 + f * (x1 - x0), y0 + f * (y1 - y0))
+                })
+            })
+            .collect()
+    }
+
+    /// The points as a robot at `pose` sees them (robot frame).
+    pub(in crate::slam) fn seen_from(points: &[Vector2<f64>], pose: &Pose2<f64>) -> ScanPoints {
+        let inverse = pose.inverse();
+        ScanPoints::from_points(
+            points
+                .iter()
+                .map(|p| {
+                    let q = inverse.transform_point(&nalgebra::Point2::new(p.x, p.y));
+                    Vector2::new(q.x, q.y)
+                })
+                .collect(),
+        )
+    }
+
+    /// A room open on one side.
+    pub(in crate::slam) const ROOM: [Wall; 3] = [
+        ((0.0, 4.0), (0.0, 0.0)),
+        ((0.0, 0.0), (5.0, 0.0)),
+        ((5.0, 0.0), (5.0, 4.0)),
+    ];
+
+    /// The points as the reference, seen from the origin.
+    pub(in crate::slam) fn reference(points: &[Vector2<f64>]) -> ReferenceCloud {
+        let scan = ScanPoints::from_points(points.to_vec());
+        ReferenceCloud::new([(Pose2::new(0.0, 0.0, 0.0), &scan)], 0.3)
+    }
+
+    #[test]
+    fn a_room_scan_is_aligned_to_the_pose_it_was_seen_from() {
+        let room = walls(&ROOM);
+        let scan = seen_from(&room, &Pose2::new(2.5, 2.0, 0.0));
+        // Start 0.14 m and 0.03 rad off the pose the scan was seen from.
+        let start = Pose2::new(2.6, 1.9, 0.03);
+        let aligned = align(&reference(&room), &scan, start, &MatchParams::default()).unwrap();
+        assert!((aligned.pose.x - 2.5).abs() < 1e-3, "{:?}", aligned.pose);
+        assert!((aligned.pose.y - 2.0).abs() < 1e-3, "{:?}", aligned.pose);
+        assert!(aligned.pose.theta.abs() < 1e-4, "{:?}", aligned.pose);
+        assert_eq!(aligned.matched, scan.len());
+        // Three walls in two directions constrain every direction.
+        let eigen = aligned.information.symmetric_eigen();
+        assert!(eigen.eigenvalues.iter().all(|&v| v > 1e3), "{eigen:?}");
+    }
+
+    #[test]
+    fn along_a_corridor_the_prior_holds_the_position_the_points_do_not() {
+        let corridor = walls(&[((0.0, 1.0), (20.0, 1.0)), ((20.0, -1.0), (0.0, -1.0))]);
+        let scan = seen_from(&corridor, &Pose2::new(10.0, 0.0, 0.0));
+        let start = Pose2::new(10.2, 0.1, 0.02);
+        let aligned = align(&reference(&corridor), &scan, start, &MatchParams::default()).unwrap();
+        // Across the corridor and in heading the walls decide; along it nothing does.
+        assert!(aligned.pose.y.abs() < 1e-3, "{:?}", aligned.pose);
+        assert!(aligned.pose.theta.abs() < 1e-4, "{:?}", aligned.pose);
+        assert!((aligned.pose.x - 10.2).abs() < 0.01, "{:?}", aligned.pose);
+        assert!(aligned.information[(0, 0)] < 1e-6 * aligned.information[(1, 1)]);
+    }
+
+    #[test]
+    fn a_scan_far_from_the_reference_is_not_aligned() {
+        let room = walls(&ROOM);
+        let scan = seen_from(&room, &Pose2::new(2.5, 2.0, 0.0));
+        let params = MatchParams::default();
+        assert!(align(&reference(&room), &scan, Pose2::new(4.0, 3.5, 0.0), &params).is_none());
+        assert!(align(
+            &ReferenceCloud::default(),
+            &scan,
+            Pose2::new(2.5, 2.0, 0.0),
+            &params
+        )
+        .is_none());
+    }
+
+    #[test]
+    fn normals_are_found_on_walls_and_not_on_clutter() {
+        let line = ScanPoints::from_points(walls(&[((1.0, -1.0), (1.0, 1.0))]));
+        for n in &line.normals {
+            let n = n.unwrap();
+            assert!((n.x.abs() - 1.0).abs() < 1e-9 && n.y.abs() < 1e-9, "{n:?}");
+        }
+        // Points 10 cm apart across and along: no line through them.
+        let clutter: Vec<_> = (0..20)
+            .map(|i| Vector2::new(1.0 + 0.1 * (i % 2) as f64, 0.05 * i as f64))
+            .collect();
+        let clutter = ScanPoints::from_points(clutter);
+        assert!(clutter.normals.iter().all(Option::is_none));
+    }
+
+    #[test]
+    fn merged_scans_are_placed_at_their_poses() {
+        let one = ScanPoints::from_points(walls(&[((1.0, 0.0), (1.0, 0.2))]));
+        let pose = Pose2::new(2.0, 3.0, std::f64::consts::FRAC_PI_2);
+        let merged = ScanPoints::merged([(Pose2::new(0.0, 0.0, 0.0), &one), (pose, &one)]);
+        assert_eq!(merged.len(), 2 * one.len());
+        let moved = merged.points[one.len()];
+        // (1, 0) turned 90° is (0, 1), then moved by (2, 3).
+        assert!((moved - Vector2::new(2.0, 4.0)).norm() < 1e-12, "{moved:?}");
+        let normal = merged.normals[one.len()].unwrap();
+        assert!(normal.x.abs() < 1e-9 && (normal.y.abs() - 1.0).abs() < 1e-9);
+    }
+}
