@@ -4,7 +4,6 @@
 //! after it fit the same correction ([`LoopClosures`]).
 
 use super::key_scans::KeyScans;
-use super::point_search::{search, PointSearch};
 use super::pose_graph::{relative, Edge};
 use super::scan_match::{align, ReferenceCloud};
 use super::SlamParams;
@@ -165,8 +164,7 @@ impl LoopClosures {
             self.params.chain_path,
             &self.localizer.laser_mount,
         );
-        // The walls first; where they find nothing unambiguous, the points.
-        let by_walls = relocalize(
+        let found = relocalize(
             &walls,
             &submap,
             &self.localizer.laser_mount,
@@ -176,19 +174,6 @@ impl LoopClosures {
         .filter(|r| r.is_unambiguous(&self.relocalize))
         .map(|r| r.best.pose)
         .filter(|pose| angle_diff(pose.theta, here.theta).abs() <= self.params.loop_max_turn);
-        let found = by_walls.or_else(|| {
-            let window = PointSearch {
-                center: here,
-                radius: window.radius,
-                max_turn: self.params.loop_max_turn,
-                min_share: self.params.point_search_min_share,
-                min_margin: self.relocalize.min_margin,
-                distinct_distance: self.relocalize.distinct_distance,
-                distinct_angle: self.relocalize.distinct_angle,
-            };
-            let points = keys.chain_points(poses, k, self.params.chain_path);
-            search(&cloud, &points, &window, &self.params.scan_match)
-        });
         let Some(found) = found else {
             return Outcome::Nothing;
         };

@@ -19,7 +19,6 @@ mod front_end;
 mod growth;
 mod key_scans;
 mod loop_closure;
-mod point_search;
 pub mod pose_graph;
 mod rematch;
 mod scan_match;
@@ -94,9 +93,7 @@ pub struct SlamParams {
     pub rematch_sigma_theta: f64,
     /// Fewest lines that must fuse in a refinement.
     pub min_loop_lines: usize,
-    /// Where the walls find no loop closure, the points search for one: the best pose
-    /// must match this share of the chain's points.
-    pub point_search_min_share: f64,
+
     /// Odometry edge: position standard deviation per key step (m) ...
     pub odometry_sigma_xy: f64,
     /// ... plus this per metre of the step.
@@ -137,7 +134,6 @@ impl Default for SlamParams {
             rematch_sigma_xy: 0.3,
             rematch_sigma_theta: 0.15,
             min_loop_lines: 3,
-            point_search_min_share: 0.6,
             odometry_sigma_xy: 0.02,
             odometry_sigma_xy_per_m: 0.03,
             odometry_sigma_theta: 0.3f64.to_radians(),
@@ -151,9 +147,8 @@ impl Default for SlamParams {
 
 impl SlamParams {
     /// Distances and standard deviations positive, angles in radians, rates, tolerances
-    /// and the map builder's gap not negative, its gate probability and the point
-    /// search's share in (0, 1), the scan matcher's settings
-    /// ([`MatchParams::validate`]).
+    /// and the map builder's gap not negative, its gate probability in (0, 1), the scan
+    /// matcher's settings valid ([`MatchParams::validate`]).
     pub fn validate(&self) -> Result<(), InvalidSetting> {
         for (key, value) in [
             ("key_distance", self.key_distance),
@@ -201,11 +196,6 @@ impl SlamParams {
                 check(key, value, Expected::Positive)?;
             }
         }
-        check(
-            "point_search_min_share",
-            self.point_search_min_share,
-            Expected::Probability,
-        )?;
         check(
             "map_builder.gate_probability",
             self.map_builder.gate_probability,

@@ -138,6 +138,15 @@ impl ScanPoints {
         merged
     }
 
+    /// Every n-th point, n the smallest that leaves at most `most` of them.
+    pub fn thinned(self, most: usize) -> Self {
+        let stride = self.points.len().div_ceil(most.max(1)).max(1);
+        Self {
+            points: self.points.into_iter().step_by(stride).collect(),
+            normals: self.normals.into_iter().step_by(stride).collect(),
+        }
+    }
+
     /// The points and normals moved by `pose` (a point `p` goes to `R(θ)p + t`).
     fn placed(
         &self,
@@ -155,11 +164,6 @@ impl ScanPoints {
     /// How many points.
     pub fn len(&self) -> usize {
         self.points.len()
-    }
-
-    /// The points (robot frame).
-    pub fn points(&self) -> &[Vector2<f64>] {
-        &self.points
     }
 
     /// No points.
@@ -268,11 +272,6 @@ impl ReferenceCloud {
         self.points.len()
     }
 
-    /// The points (map frame).
-    pub fn points(&self) -> impl Iterator<Item = &Vector2<f64>> {
-        self.points.iter().map(|(q, _)| q)
-    }
-
     /// The points of cell `(cx, cy)` (cell coordinates); none outside the grid.
     fn in_cell(&self, cx: i64, cy: i64) -> &[Surface] {
         let (ix, iy) = (cx - self.origin.0, cy - self.origin.1);
@@ -303,7 +302,7 @@ impl ReferenceCloud {
 
 /// The cell of size `cell` (m) that holds `p`, in cell coordinates (exact: map
 /// coordinates are far below 2⁵³ cells).
-pub(super) fn cell_of(p: &Vector2<f64>, cell: f64) -> (i64, i64) {
+fn cell_of(p: &Vector2<f64>, cell: f64) -> (i64, i64) {
     ((p.x / cell).floor() as i64, (p.y / cell).floor() as i64)
 }
 
@@ -387,14 +386,14 @@ pub fn align(
 }
 
 #[cfg(test)]
-pub(super) mod tests {
+mod tests {
     use super::*;
 
     /// A wall from one end to the other.
-    pub(in crate::slam) type Wall = ((f64, f64), (f64, f64));
+    type Wall = ((f64, f64), (f64, f64));
 
     /// Points every 2 cm along the walls, in order.
-    pub(in crate::slam) fn walls(segments: &[Wall]) -> Vec<Vector2<f64>> {
+    fn walls(segments: &[Wall]) -> Vec<Vector2<f64>> {
         segments
             .iter()
             .flat_map(|&((x0, y0), (x1, y1))| {
@@ -408,7 +407,7 @@ pub(super) mod tests {
     }
 
     /// The points as a robot at `pose` sees them (robot frame).
-    pub(in crate::slam) fn seen_from(points: &[Vector2<f64>], pose: &Pose2<f64>) -> ScanPoints {
+    fn seen_from(points: &[Vector2<f64>], pose: &Pose2<f64>) -> ScanPoints {
         let inverse = pose.inverse();
         ScanPoints::from_points(
             points
@@ -422,14 +421,14 @@ pub(super) mod tests {
     }
 
     /// A room open on one side.
-    pub(in crate::slam) const ROOM: [Wall; 3] = [
+    const ROOM: [Wall; 3] = [
         ((0.0, 4.0), (0.0, 0.0)),
         ((0.0, 0.0), (5.0, 0.0)),
         ((5.0, 0.0), (5.0, 4.0)),
     ];
 
     /// The points as the reference, seen from the origin.
-    pub(in crate::slam) fn reference(points: &[Vector2<f64>]) -> ReferenceCloud {
+    fn reference(points: &[Vector2<f64>]) -> ReferenceCloud {
         let scan = ScanPoints::from_points(points.to_vec());
         ReferenceCloud::new([(Pose2::new(0.0, 0.0, 0.0), &scan)], 0.3)
     }
