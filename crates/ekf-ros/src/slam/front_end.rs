@@ -1,7 +1,8 @@
 //! The SLAM front end, handed every fused scan by the replay loop: the filter localizes in
 //! a local map of the last key scans (so its error grows only with the path since them),
-//! and without a compass each scan's points are aligned to theirs ([`align`]); a scan taken far enough from the last key scan becomes a key scan, tied to it in the
-//! pose graph by the filter's relative pose; loop closures found and confirmed
+//! and without a compass each scan's points are aligned to theirs ([`align`]); a scan
+//! taken far enough from the last key scan becomes a key scan, tied to it in the pose
+//! graph by the filter's relative pose; loop closures found and confirmed
 //! ([`LoopClosures`]) are added, and unless the graph already agrees with them it is
 //! optimised and the filter restarted at its key scan's corrected pose.
 
@@ -64,10 +65,11 @@ impl FrontEnd {
     /// A front end with `params`, its localizer configured as `localizer` (laser mount,
     /// matching) for the loop closures' refinement; `align_scans`: each scan's points are
     /// aligned to the local map's. Without a compass the lines alone let the heading
-    /// drift (edmonton: 5.4° RMS heading error without the alignment, 2.2° with it); with
+    /// drift (loop closures off, aligned RMSE: edmonton 1.24 m with the lines alone,
+    /// 0.79 m with the alignment; infinite-corridor 33.6 m and 16.6 m); with
     /// one the compass holds it, and the alignment, which slides along a corridor by a
-    /// few centimetres a scan, only adds drift (simulated two-rooms: 0.016 m without,
-    /// 1.9 m with).
+    /// few centimetres a scan, only adds drift (simulated two-rooms, loop closures off:
+    /// 0.044 m without, 2.8 m with).
     pub fn new(params: SlamParams, localizer: LocalizerConfig, align_scans: bool) -> Self {
         Self {
             align_scans,
