@@ -198,11 +198,13 @@ impl ScanHook for FrontEnd {
             }
             None => fuser.localizer().pose(),
         };
-        let points = ScanPoints::from_scan(scan, &self.mount);
-        let aligned = match self.align_scans {
-            true => align(&self.cloud, &points, pose, &self.params.scan_match),
-            false => None,
-        };
+        // The scan's points: for the alignment, and for a key scan (made below if it is).
+        let points = self
+            .align_scans
+            .then(|| ScanPoints::from_scan(scan, &self.mount));
+        let aligned = points
+            .as_ref()
+            .and_then(|points| align(&self.cloud, points, pose, &self.params.scan_match));
         if let Some(aligned) = aligned {
             let covariance = *fuser.localizer().covariance();
             fuser
@@ -233,7 +235,7 @@ impl ScanHook for FrontEnd {
         let k = self.keys.push(KeyScan {
             front: pose,
             lines,
-            points,
+            points: points.unwrap_or_else(|| ScanPoints::from_scan(scan, &self.mount)),
             path: self.path,
         });
         match previous {

@@ -153,11 +153,6 @@ impl LoopClosures {
             center: nalgebra::Point2::new(here.x, here.y),
             radius: reach(anchor),
         };
-        let cloud = keys.cloud_of(
-            poses,
-            near.iter().map(|&(j, _)| j),
-            self.params.scan_match.max_distance,
-        );
         let walls = keys.chain_walls(
             poses,
             k,
@@ -177,6 +172,11 @@ impl LoopClosures {
         let Some(found) = found else {
             return Outcome::Nothing;
         };
+        let cloud = keys.cloud_of(
+            poses,
+            near.iter().map(|&(j, _)| j),
+            self.params.scan_match.max_distance,
+        );
         let Some((pose, information)) = self.refine_chain(keys, poses, k, &submap, &cloud, &found)
         else {
             return Outcome::Nothing;
