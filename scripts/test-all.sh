@@ -13,6 +13,9 @@ rustup target add thumbv7em-none-eabihf >/dev/null
 step "cargo fmt --check"
 cargo fmt --all --check
 
+step "no import cycles between modules (scripts/module-cycles.py)"
+"${PYTHON:-python3}" scripts/module-cycles.py
+
 step "cargo clippy --all-targets -- -D warnings"
 cargo clippy --workspace --all-targets -- -D warnings
 

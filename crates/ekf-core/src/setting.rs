@@ -23,6 +23,8 @@ pub enum Expected {
     Radians,
     /// A time in `[min, max]` seconds.
     SecondsIn(f64, f64),
+    /// A length in `[min, max]` metres.
+    MetresIn(f64, f64),
     /// Degrees within `±max`, with the reason for the bound.
     DegreesWithin(f64, &'static str),
 }
@@ -36,7 +38,9 @@ impl Expected {
             Expected::LengthUpTo(max) => v.is_finite() && v > 0.0 && v <= max,
             Expected::MetresWithin(max) => v.is_finite() && v.abs() <= max,
             Expected::Radians => v.is_finite() && v.abs() <= core::f64::consts::TAU,
-            Expected::SecondsIn(min, max) => v.is_finite() && (min..=max).contains(&v),
+            Expected::SecondsIn(min, max) | Expected::MetresIn(min, max) => {
+                v.is_finite() && (min..=max).contains(&v)
+            }
             Expected::DegreesWithin(max, _) => v.is_finite() && v.abs() <= max,
         }
     }
@@ -124,6 +128,12 @@ impl fmt::Display for Message<'_> {
             Expected::SecondsIn(min, max) => write!(
                 f,
                 "expected seconds in [{}, {}], found {found}",
+                Number(min),
+                Number(max)
+            ),
+            Expected::MetresIn(min, max) => write!(
+                f,
+                "expected metres in [{}, {}], found {found}",
                 Number(min),
                 Number(max)
             ),
@@ -215,6 +225,12 @@ mod tests {
                 0.0,
                 61.0,
                 "expected seconds in [0, 60], found 61",
+            ),
+            (
+                Expected::MetresIn(0.05, 10.0),
+                0.3,
+                0.001,
+                "expected metres in [0.05, 10], found 0.001",
             ),
             (
                 Expected::DegreesWithin(89.0, " (the poles)"),

@@ -4,8 +4,8 @@
 use crate::arrays::{check_finite, check_shape, new_array, pose3, real_array};
 use crate::errors::{file_error, path_error, value_error};
 use crate::lines::Lines;
+use crate::params::load_config;
 use crate::params::{from_dict, to_python};
-use crate::replay::load_config;
 use ekf_ros::grid::{self, GridImportParams};
 use ekf_ros::map_build::{build_map, MapSource};
 use ekf_ros::slam::build_slam_map;

@@ -1,13 +1,15 @@
 //! Parameter groups from Python dicts: the same serde structs (and so the same field names,
 //! defaults and "unknown field" errors) as the TOML config file of `ekf config`.
 
-use crate::errors::value_error;
+use crate::errors::{file_error, value_error};
+use ekf_ros::config::Config;
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 use pyo3::sync::PyOnceLock;
 use pyo3::types::PyDict;
 use serde::de::DeserializeOwned;
 use serde::Serialize;
+use std::path::PathBuf;
 
 /// Python's `json` module function `name`, looked up once per name.
 fn json_fn<'py>(
@@ -49,4 +51,21 @@ pub fn to_python<'py, T: Serialize>(py: Python<'py>, value: &T) -> PyResult<Boun
     let text = serde_json::to_string(value).map_err(value_error)?;
     static LOADS: PyOnceLock<Py<PyAny>> = PyOnceLock::new();
     json_fn(py, &LOADS, "loads")?.call1((text,))
+}
+
+/// The `ekf` configuration: the defaults for `None`, a TOML file for a path (as
+/// `--config`), or a dict of the same groups and keys.
+pub fn load_config(config: Option<&Bound<'_, PyAny>>) -> PyResult<Config> {
+    match config {
+        Some(c) if c.is_instance_of::<PyDict>() => from_dict::<Config>(Some(c), "config")?
+            .validated("config")
+            .map_err(value_error),
+        Some(c) if !c.is_none() => {
+            let path: PathBuf = c.extract().map_err(|_| {
+                PyTypeError::new_err("config: expected a path to a TOML file, a dict or None")
+            })?;
+            Config::load(&path).map_err(|e| file_error(&e))
+        }
+        _ => Ok(Config::default()),
+    }
 }

@@ -2,15 +2,13 @@
 //! estimated trajectory as numpy arrays and the summary `ekf replay --json` prints.
 
 use crate::arrays::{new_array, row_major3};
-use crate::errors::{file_error, path_error, value_error};
-use crate::params::{from_dict, to_python};
-use ekf_ros::config::Config;
+use crate::errors::{file_error, path_error};
+use crate::params::{load_config, to_python};
 use ekf_ros::replay::{replay as replay_log, Mode, ReplayOptions};
 use ekf_ros::trajectory::Trajectory;
 use numpy::{Ix1, Ix3, PyArray1, PyArray3};
-use pyo3::exceptions::{PyTypeError, PyValueError};
+use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
 use std::path::PathBuf;
 
 /// The result of `replay`: the estimate at every motion step and scan (as the TUM file of
@@ -42,23 +40,6 @@ pub struct ReplayResult {
     /// The map at the end: the given one, the first scan's, or with `grow_map` the grown
     /// map.
     pub map: Py<crate::map::LineMap>,
-}
-
-/// The `ekf` configuration: the defaults for `None`, a TOML file for a path (as
-/// `--config`), or a dict of the same groups and keys.
-pub fn load_config(config: Option<&Bound<'_, PyAny>>) -> PyResult<Config> {
-    match config {
-        Some(c) if c.is_instance_of::<PyDict>() => from_dict::<Config>(Some(c), "config")?
-            .validated("config")
-            .map_err(value_error),
-        Some(c) if !c.is_none() => {
-            let path: PathBuf = c.extract().map_err(|_| {
-                PyTypeError::new_err("config: expected a path to a TOML file, a dict or None")
-            })?;
-            Config::load(&path).map_err(|e| file_error(&e))
-        }
-        _ => Ok(Config::default()),
-    }
 }
 
 /// `mode` by its command-line name.

@@ -81,7 +81,7 @@ pub struct Config {
     /// How late a measurement may be and still be fused at its stamp.
     pub timing: TimingConfig,
     /// `ekf map build --slam`: key scans, loop closures, the pose graph.
-    pub slam: crate::slam::SlamParams,
+    pub slam: crate::slam_config::SlamParams,
 }
 
 /// Measurements fused at their own stamps ([`ekf_fusion::TimedLocalizer`]): replay holds

@@ -19,6 +19,7 @@ pub mod output_dir;
 pub mod replay;
 pub mod ros2;
 pub mod slam;
+pub mod slam_config;
 pub mod trajectory;
 pub mod tum;
 

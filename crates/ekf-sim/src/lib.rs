@@ -21,9 +21,7 @@ pub use log::LogRecorder;
 pub use path::{Path, PurePursuit};
 pub use robot::RobotModel;
 pub use room::Room;
-pub use run::{
-    simulate, Estimator, Feedback, Nees, Sample, SimError, SimOptions, SimResult, SimStats,
-};
+pub use run::{simulate, Estimator, Feedback, Nees, SimError, SimOptions, SimResult, SimStats};
 pub use scenario::{Scenario, ScenarioError, BUILTIN};
 pub use sensors::{CompassModel, LaserModel};
-pub use stepper::Simulator;
+pub use stepper::{Sample, Simulator};

@@ -4,9 +4,9 @@
 //! pose on `/ground_truth`; plus an MCAP metadata record `simulation` naming the scenario,
 //! the seed and every noise parameter. The same scenario and seed give the same bytes.
 
-use super::run::Sample;
 use super::scenario::Scenario;
 use super::sensors::LASER_RANGE_MIN;
+use super::stepper::Sample;
 use ekf_ros::mcap_io::{BagWriter, WriteError};
 use ekf_ros::ros2::build::{
     compass_imu, header, laser_scan, mount_transform, odometry, BASE_FRAME, MAP_FRAME,

@@ -6,8 +6,8 @@
 use super::log::LogRecorder;
 use super::rng::{SimRng, Stream};
 use super::scenario::Scenario;
-use super::sensors::{CompassReading, LASER_RANGE_MIN};
-use super::stepper::Simulator;
+use super::sensors::LASER_RANGE_MIN;
+use super::stepper::{Sample, Simulator};
 use ekf_core::{angle_diff, Pose2};
 use ekf_fusion::{Fused, Fuser, FusionConfig, FusionError, Input, Mode, Scan, Tracking};
 use ekf_ros::mcap_io::WriteError;
@@ -79,21 +79,6 @@ pub enum SimError {
     /// The log could not be written.
     #[error(transparent)]
     Write(#[from] WriteError),
-}
-
-/// One step's measurements, as the sensors report them.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Sample {
-    /// Time (ns since the start).
-    pub t_ns: u64,
-    /// The true pose.
-    pub truth: Pose2<f64>,
-    /// Encoder counts since the start (left, right).
-    pub ticks: [i64; 2],
-    /// The compass reading.
-    pub compass: CompassReading,
-    /// A laser sweep, on the steps that have one.
-    pub scan: Option<Vec<f32>>,
 }
 
 /// Counts of a run.

@@ -5,9 +5,24 @@
 use super::path::PurePursuit;
 use super::rng::{SimRng, Stream};
 use super::robot::Robot;
-use super::run::Sample;
 use super::scenario::Scenario;
+use super::sensors::CompassReading;
 use ekf_core::Pose2;
+
+/// One step's measurements, as the sensors report them.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Sample {
+    /// Time (ns since the start).
+    pub t_ns: u64,
+    /// The true pose.
+    pub truth: Pose2<f64>,
+    /// Encoder counts since the start (left, right).
+    pub ticks: [i64; 2],
+    /// The compass reading.
+    pub compass: CompassReading,
+    /// A laser sweep, on the steps that have one.
+    pub scan: Option<Vec<f32>>,
+}
 
 /// A scenario being driven: the robot, its path follower and the seeded noise of its
 /// sensors. Step 0 is the start; each [`advance`](Self::advance) drives one period.

@@ -9,6 +9,7 @@
 
 extern crate alloc;
 
+mod checks;
 pub mod extract;
 pub mod localizer;
 pub mod map;

@@ -1,6 +1,6 @@
 //! A line extracted from one scan: the measurement the filter fuses.
 
-use ekf_core::{wrap_angle, Line, Pose2};
+use ekf_core::{wrap_angle, Error, Line, Pose2};
 use nalgebra::{Matrix2, Point2};
 
 /// A line observed in one scan, in the sensor frame.
@@ -20,6 +20,41 @@ pub struct ObservedLine {
 }
 
 impl ObservedLine {
+    /// Fails unless the line, its end points and covariance are finite and the covariance is
+    /// symmetric positive definite.
+    pub fn validate(&self) -> Result<(), Error> {
+        let values = [
+            self.line.rho,
+            self.line.beta,
+            self.start.x,
+            self.start.y,
+            self.end.x,
+            self.end.y,
+        ];
+        if values
+            .iter()
+            .chain(self.covariance.iter())
+            .any(|v| !v.is_finite())
+        {
+            return Err(Error::NonFinite {
+                what: "observed line",
+            });
+        }
+        let c = &self.covariance;
+        let scale = c.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+        if (c[(0, 1)] - c[(1, 0)]).abs() > 1e-9 * scale {
+            return Err(Error::NotSymmetric {
+                what: "observed line covariance",
+            });
+        }
+        if c.cholesky().is_none() {
+            return Err(Error::NotPositiveDefinite {
+                what: "observed line covariance",
+            });
+        }
+        Ok(())
+    }
+
     /// Length of the segment between its end points (m).
     pub fn length(&self) -> f64 {
         (self.end - self.start).norm()

@@ -61,10 +61,11 @@
 //! yields no references. Before the first reset the chain is the `ODOM` poses exactly,
 //! so a plain log's odometry comes out as it is written.
 
-use super::clock::{ClockRepair, Entry, RawStamp, Stamp, PROBE_RECORDS};
+use super::clock::{ClockRepair, Entry, Stamp, PROBE_RECORDS};
 use super::compass::{CompassNoise, SyntheticCompass};
 use super::error::ImportError;
 use super::fields::Fields;
+use super::fields::RawStamp;
 use super::range_limit::range_limit;
 use super::record::{ImportRecord, Odometry, Reference, Scan};
 use super::stats::{ImportStats, RangeMax};

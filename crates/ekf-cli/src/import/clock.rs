@@ -27,13 +27,13 @@
 //!   [`PROBE_RECORDS`] records wait: a longer run of bad stamps is placed after the last
 //!   good stamp at `SYNTHETIC_STEP_NS` each, and the last of them becomes the new anchor.
 //!
-//! Each kind of repair is counted in [`TimeRepairs`] with the first few line numbers. In
+//! Each kind of repair is counted in [`TimeRepairs`](super::TimeRepairs) with the first few line numbers. In
 //! strict mode the first bad stamp is an error naming its line instead.
 
 use super::error::ImportError;
+use super::fields::RawStamp;
 use super::record::ImportRecord;
 use super::stream::Output;
-use serde::Serialize;
 use std::collections::VecDeque;
 
 /// Records with their own stamp that decide whether the clock is broken throughout, and
@@ -42,88 +42,6 @@ pub const PROBE_RECORDS: usize = 1000;
 
 /// Time between records given synthetic times (ns): 0.1 s, a typical odometry period.
 pub const SYNTHETIC_STEP_NS: u64 = 100_000_000;
-
-/// How many line numbers a [`RepairCount`] keeps.
-const FIRST_LINES: usize = 5;
-
-/// A timestamp as read from the text, before repair.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) enum RawStamp {
-    /// A positive time (ns).
-    Valid(u64),
-    /// Exactly zero.
-    Zero,
-    /// Not zero, but below one nanosecond in magnitude (uninitialised memory, e.g.
-    /// `8.97e-67`).
-    Denormal,
-    /// Negative.
-    Negative,
-}
-
-impl RawStamp {
-    /// Reads a time in seconds; `None` if the text is not a finite number or does not fit
-    /// in `u64` nanoseconds.
-    pub(crate) fn parse(text: &str) -> Option<Self> {
-        if let Some(ns) = super::fields::seconds_to_ns(text) {
-            if ns > 0 {
-                return Some(Self::Valid(ns));
-            }
-        }
-        let secs: f64 = text.parse().ok().filter(|s: &f64| s.is_finite())?;
-        if secs == 0.0 {
-            Some(Self::Zero)
-        } else if secs.abs() < 1e-9 {
-            Some(Self::Denormal)
-        } else if secs < 0.0 {
-            Some(Self::Negative)
-        } else {
-            None
-        }
-    }
-}
-
-/// How often one kind of repair was made, and where.
-#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize)]
-pub struct RepairCount {
-    /// Records repaired.
-    pub count: u64,
-    /// The first few of their 1-based line numbers.
-    pub first_lines: Vec<u64>,
-}
-
-impl RepairCount {
-    /// Counts one repair at `line`.
-    pub(crate) fn add(&mut self, line: u64) {
-        self.count += 1;
-        if self.first_lines.len() < FIRST_LINES {
-            self.first_lines.push(line);
-        }
-    }
-}
-
-/// The clock repairs of an import (see the module docs for the rules).
-#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize)]
-pub struct TimeRepairs {
-    /// The clock was judged broken throughout: every record has a synthetic time in file
-    /// order, [`SYNTHETIC_STEP_NS`] apart (a sensor record directly after an odometry
-    /// record shares its time). The other counts stay 0 then.
-    pub clock_broken: bool,
-    /// Negative stamps repaired.
-    pub negative: RepairCount,
-    /// Zero stamps repaired.
-    pub zero: RepairCount,
-    /// Non-zero stamps below one nanosecond repaired.
-    pub denormal: RepairCount,
-    /// Stamps earlier than the last good one repaired.
-    pub backwards: RepairCount,
-}
-
-impl TimeRepairs {
-    /// Records whose time is not their own stamp (all of them when the clock is broken).
-    pub fn repaired(&self) -> u64 {
-        self.negative.count + self.zero.count + self.denormal.count + self.backwards.count
-    }
-}
 
 /// Where a record's time comes from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -382,6 +300,7 @@ impl ClockRepair {
 mod tests {
     use super::*;
     use crate::import::record::Odometry;
+    use crate::import::stats::TimeRepairs;
     use ekf_core::Pose2;
 
     fn entry(line: u64, raw: RawStamp) -> Entry {

@@ -1,7 +1,6 @@
 //! Reading typed values out of one whitespace-separated log line, with errors that name
 //! the line, the record and the field.
 
-use super::clock::RawStamp;
 use super::error::ImportError;
 use ekf_core::Pose2;
 
@@ -184,6 +183,42 @@ pub(crate) fn seconds_to_ns(text: &str) -> Option<u64> {
     let ns = (secs * 1e9).round();
     // u64::MAX as f64 rounds up to 2^64, so `<` keeps the cast in range.
     (secs.is_finite() && ns >= 0.0 && ns < u64::MAX as f64).then_some(ns as u64)
+}
+
+/// A timestamp as read from the text, before repair.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum RawStamp {
+    /// A positive time (ns).
+    Valid(u64),
+    /// Exactly zero.
+    Zero,
+    /// Not zero, but below one nanosecond in magnitude (uninitialised memory, e.g.
+    /// `8.97e-67`).
+    Denormal,
+    /// Negative.
+    Negative,
+}
+
+impl RawStamp {
+    /// Reads a time in seconds; `None` if the text is not a finite number or does not fit
+    /// in `u64` nanoseconds.
+    pub(crate) fn parse(text: &str) -> Option<Self> {
+        if let Some(ns) = seconds_to_ns(text) {
+            if ns > 0 {
+                return Some(Self::Valid(ns));
+            }
+        }
+        let secs: f64 = text.parse().ok().filter(|s: &f64| s.is_finite())?;
+        if secs == 0.0 {
+            Some(Self::Zero)
+        } else if secs.abs() < 1e-9 {
+            Some(Self::Denormal)
+        } else if secs < 0.0 {
+            Some(Self::Negative)
+        } else {
+            None
+        }
+    }
 }
 
 #[cfg(test)]

@@ -42,7 +42,7 @@ mod stats;
 mod stream;
 
 pub use carmen::{read_carmen, CarmenFlavour, CarmenOptions, CarmenReader};
-pub use clock::{RepairCount, TimeRepairs, PROBE_RECORDS, RESTART_RECORDS, SYNTHETIC_STEP_NS};
+pub use clock::{PROBE_RECORDS, RESTART_RECORDS, SYNTHETIC_STEP_NS};
 pub use compass::SyntheticCompass;
 pub use error::ImportError;
 pub use lines::MAX_LINE_BYTES;
@@ -50,3 +50,4 @@ pub use mrpt::{read_mrpt, MrptReader};
 pub use record::{Compass, ImportRecord, Odometry, Reference, Scan};
 pub use source::open_log;
 pub use stats::{ImportStats, RangeMax, RangeMaxSource};
+pub use stats::{RepairCount, TimeRepairs};

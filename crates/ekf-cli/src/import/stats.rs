@@ -1,6 +1,5 @@
 //! What an import saw: record counts, time span, time going backwards, skipped lines.
 
-use super::clock::{RepairCount, TimeRepairs};
 use super::record::ImportRecord;
 use serde::Serialize;
 
@@ -100,5 +99,51 @@ impl ImportStats {
         }
         self.t_min_ns = Some(self.t_min_ns.map_or(t, |m| m.min(t)));
         self.t_max_ns = Some(self.t_max_ns.map_or(t, |m| m.max(t)));
+    }
+}
+
+/// How many line numbers a [`RepairCount`] keeps.
+const FIRST_LINES: usize = 5;
+
+/// How often one kind of repair was made, and where.
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize)]
+pub struct RepairCount {
+    /// Records repaired.
+    pub count: u64,
+    /// The first few of their 1-based line numbers.
+    pub first_lines: Vec<u64>,
+}
+
+impl RepairCount {
+    /// Counts one repair at `line`.
+    pub(crate) fn add(&mut self, line: u64) {
+        self.count += 1;
+        if self.first_lines.len() < FIRST_LINES {
+            self.first_lines.push(line);
+        }
+    }
+}
+
+/// The clock repairs of an import (see the module docs for the rules).
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize)]
+pub struct TimeRepairs {
+    /// The clock was judged broken throughout: every record has a synthetic time in file
+    /// order, [`SYNTHETIC_STEP_NS`](super::clock::SYNTHETIC_STEP_NS) apart (a sensor record directly after an odometry
+    /// record shares its time). The other counts stay 0 then.
+    pub clock_broken: bool,
+    /// Negative stamps repaired.
+    pub negative: RepairCount,
+    /// Zero stamps repaired.
+    pub zero: RepairCount,
+    /// Non-zero stamps below one nanosecond repaired.
+    pub denormal: RepairCount,
+    /// Stamps earlier than the last good one repaired.
+    pub backwards: RepairCount,
+}
+
+impl TimeRepairs {
+    /// Records whose time is not their own stamp (all of them when the clock is broken).
+    pub fn repaired(&self) -> u64 {
+        self.negative.count + self.zero.count + self.denormal.count + self.backwards.count
     }
 }

@@ -1,9 +1,10 @@
 //! Messages in log-time order through the chunk indexes, around the `mcap` crate's sans-io
 //! `IndexedReader`, with each chunk's CRC checked before any of its messages is delivered.
 
+use super::error::LostRange;
 use super::guard::{check_chunk, check_record};
 use super::message::ChannelInfo;
-use super::source::{LostRange, Raw, SourceError, MAX_RECORD_BYTES};
+use super::source::{Raw, SourceError, MAX_RECORD_BYTES};
 use mcap::records::{op, ChunkIndex, Record};
 use mcap::sans_io::indexed_reader::ReadOrder;
 use mcap::sans_io::{

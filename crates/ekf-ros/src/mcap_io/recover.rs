@@ -2,10 +2,11 @@
 //! short): one pass over the file that checks every chunk and notes where it lies, going
 //! on at the next intact chunk after damage.
 
+use super::error::LostRange;
 use super::guard::check_record;
 use super::indexed::for_each_chunk_record;
 use super::resync::next_chunk;
-use super::source::{LostRange, SourceError, MAX_RECORD_BYTES, READ_PIECE};
+use super::source::{SourceError, MAX_RECORD_BYTES, READ_PIECE};
 use mcap::records::{op, ChunkIndex, Record, Statistics};
 use mcap::sans_io::{LinearReadEvent, LinearReader, LinearReaderOptions};
 use mcap::{Channel, McapError, Schema, Summary};

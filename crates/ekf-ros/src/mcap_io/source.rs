@@ -1,6 +1,7 @@
 //! What the message sources share: the size limits that keep corrupt lengths from
 //! requesting memory, the message as read, and why a source stopped.
 
+use super::error::LostRange;
 use super::message::ChannelInfo;
 use mcap::McapError;
 use std::io;
@@ -23,35 +24,6 @@ pub(crate) struct Raw {
     pub publish_time: u64,
     /// CDR payload.
     pub data: Vec<u8>,
-}
-
-/// Log times (ns) that bound the messages of a skipped stretch of a file: the damaged
-/// chunk's own first and last message times when the file's index gives them, else the
-/// end of the intact chunk before the stretch and the start of the one after it (either
-/// unknown when there is none on that side).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
-pub struct LostRange {
-    /// The earliest log time the lost messages can have.
-    pub from_ns: Option<u64>,
-    /// The latest.
-    pub to_ns: Option<u64>,
-}
-
-impl std::fmt::Display for LostRange {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let s = |t: u64| t as f64 * 1e-9;
-        match (self.from_ns, self.to_ns) {
-            (Some(a), Some(b)) => write!(
-                f,
-                "messages logged from {:.3} s to {:.3} s lost",
-                s(a),
-                s(b)
-            ),
-            (Some(a), None) => write!(f, "messages logged after {:.3} s lost", s(a)),
-            (None, Some(b)) => write!(f, "messages logged before {:.3} s lost", s(b)),
-            (None, None) => write!(f, "log times of the lost messages unknown"),
-        }
-    }
 }
 
 /// Why a source stopped, or what it skipped, with the byte offset it had reached.

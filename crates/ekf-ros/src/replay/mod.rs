@@ -13,6 +13,7 @@
 pub mod accuracy;
 mod error;
 pub mod events;
+pub mod grow_map;
 mod hook;
 pub mod inputs;
 pub mod outputs;
@@ -58,7 +59,7 @@ pub struct ReplayOptions {
     pub out_mcap: Option<PathBuf>,
     /// Output TUM trajectory.
     pub tum: Option<PathBuf>,
-    /// Keep adding walls to the map as the robot explores ([`crate::slam::MapGrowth`]);
+    /// Keep adding walls to the map as the robot explores ([`grow_map::MapGrowth`]);
     /// [`ReplayOutcome::map`] is then the grown map.
     pub grow_map: bool,
     /// Keep the estimated and reference trajectories in memory (for plots); otherwise the
@@ -232,7 +233,7 @@ pub fn replay_with(
         return Err(ReplayError::GrowMapNeedsFirstScan);
     }
     let mut growth = match options.grow_map {
-        true => Some(crate::slam::MapGrowth::new(&config.slam)?),
+        true => Some(grow_map::MapGrowth::new(&config.slam)?),
         false => None,
     };
     let hook = hook.or(growth.as_mut().map(|g| g as &mut dyn ScanHook));

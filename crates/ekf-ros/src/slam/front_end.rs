@@ -6,7 +6,7 @@
 //! ([`LoopClosures`]) are added, and unless the graph already agrees with them it is
 //! optimised and the filter restarted at its key scan's corrected pose.
 
-use super::key_scans::{is_key, KeyScan, KeyScans};
+use super::key_scans::{KeyScan, KeyScans};
 use super::loop_closure::{LoopClosures, Outcome};
 use super::pose_graph::{relative, Edge, PoseGraph};
 use super::rematch::rematch;
@@ -220,7 +220,7 @@ impl ScanHook for FrontEnd {
         let previous = self.keys.len().checked_sub(1);
         let is_key = match previous {
             None => !lines.is_empty(),
-            Some(p) => is_key(&self.keys.get(p).front, &pose, &self.params),
+            Some(p) => self.params.is_key(&self.keys.get(p).front, &pose),
         };
         if !is_key {
             if let Some(key) = previous {

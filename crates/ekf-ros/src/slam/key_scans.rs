@@ -2,16 +2,8 @@
 //! robot had driven; maps are built from any set of them at their graph poses.
 
 use super::scan_match::{ReferenceCloud, ScanPoints};
-use super::SlamParams;
-use ekf_core::{angle_diff, Pose2};
+use ekf_core::Pose2;
 use lrf_lines::{LineMap, MapBuilder, MapBuilderParams, ObservedLine};
-
-/// Whether a scan at `pose` is a key scan after the last one at `last`: it is
-/// `key_distance` from it or turned `key_angle`.
-pub fn is_key(last: &Pose2<f64>, pose: &Pose2<f64>, params: &SlamParams) -> bool {
-    (pose.x - last.x).hypot(pose.y - last.y) >= params.key_distance
-        || angle_diff(pose.theta, last.theta).abs() >= params.key_angle
-}
 
 /// The most points of a chain a loop closure aligns: a few scans' worth, spread over all
 /// of the chain's key scans (a simulated laser of 0.25° beams gives 2,800 points over

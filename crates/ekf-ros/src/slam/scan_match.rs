@@ -13,7 +13,7 @@
 //! filter's pose that holds the directions the points do not constrain (along a
 //! corridor) where the filter had them.
 
-use ekf_core::setting::{check, Expected, InvalidSetting};
+use crate::slam_config::{MatchParams, REFERENCE_VOXEL};
 use ekf_core::{angle_diff, Pose2};
 use ekf_fusion::Scan;
 use nalgebra::{Matrix2, Matrix3, SymmetricEigen, Vector2, Vector3};
@@ -25,70 +25,6 @@ const NORMAL_HALF_WINDOW: usize = 3;
 const NORMAL_RADIUS: f64 = 0.5;
 /// The surface is a line if its points' spread across it is at most this (m, one σ).
 const NORMAL_MAX_THICKNESS: f64 = 0.03;
-
-/// The reference keeps one point per square of this size (m), the first seen: key scans
-/// that overlap do not multiply the points a match searches through.
-const REFERENCE_VOXEL: f64 = 0.05;
-
-/// The settings of the scan matcher (`[slam.scan_match]`).
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
-#[serde(default, deny_unknown_fields)]
-pub struct MatchParams {
-    /// A point farther than this (m) from every reference point is not matched.
-    pub max_distance: f64,
-    /// Standard deviation (m) of a point's distance to its surface: the range noise and
-    /// the reference's own.
-    pub sigma: f64,
-    /// Prior standard deviation (m) of the filter's position ...
-    pub prior_sigma_xy: f64,
-    /// ... and heading (rad).
-    pub prior_sigma_theta: f64,
-    /// Gauss–Newton iterations at most.
-    pub max_iterations: usize,
-    /// Share of the scan's points that must be matched for the result to stand.
-    pub min_matched_share: f64,
-}
-
-impl Default for MatchParams {
-    /// A laser of a few centimetres' range noise, matched within 0.3 m of where the filter
-    /// put it.
-    fn default() -> Self {
-        Self {
-            max_distance: 0.3,
-            sigma: 0.05,
-            prior_sigma_xy: 0.3,
-            prior_sigma_theta: 0.15,
-            max_iterations: 20,
-            min_matched_share: 0.3,
-        }
-    }
-}
-
-impl MatchParams {
-    /// Distances, standard deviations and the iteration count positive, the prior's
-    /// heading in radians, the matched share a probability (a share in (0, 1)).
-    pub fn validate(&self) -> Result<(), InvalidSetting> {
-        for (key, value) in [
-            ("scan_match.max_distance", self.max_distance),
-            ("scan_match.sigma", self.sigma),
-            ("scan_match.prior_sigma_xy", self.prior_sigma_xy),
-            ("scan_match.prior_sigma_theta", self.prior_sigma_theta),
-            ("scan_match.max_iterations", self.max_iterations as f64),
-        ] {
-            check(key, value, Expected::Positive)?;
-        }
-        check(
-            "scan_match.prior_sigma_theta",
-            self.prior_sigma_theta,
-            Expected::Radians,
-        )?;
-        check(
-            "scan_match.min_matched_share",
-            self.min_matched_share,
-            Expected::Probability,
-        )
-    }
-}
 
 /// A scan's points (robot frame), each with its surface normal where its neighbours
 /// along the scan lie on a line.

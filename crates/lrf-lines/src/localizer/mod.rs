@@ -577,7 +577,7 @@ impl Localizer {
     /// it was, on a line that is not finite or whose covariance is not positive definite.
     pub fn update_lines(&mut self, lines: &[ObservedLine]) -> Result<ScanReport, LocalizerError> {
         for line in lines {
-            crate::matching::validate_observed(line).map_err(LocalizerError::Filter)?;
+            line.validate().map_err(LocalizerError::Filter)?;
         }
         self.fusions.clear();
         self.lines.clear();

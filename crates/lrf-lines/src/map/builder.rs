@@ -3,7 +3,7 @@
 
 use super::wall_index::WallIndex;
 use super::{interval_along, point_on_line, LineMap, MapSegment};
-use crate::matching::{non_negative_params, validate_observed};
+use crate::checks::non_negative_params;
 use crate::observed::normalized;
 use crate::ObservedLine;
 use alloc::vec::Vec;
@@ -138,7 +138,7 @@ impl MapBuilder {
     ) -> Result<(), Error> {
         sensor_pose.validated("sensor pose")?;
         for observed in lines {
-            validate_observed(observed)?;
+            observed.validate()?;
         }
         for observed in lines {
             if let Some(sighting) = sighting(observed, sensor_pose) {

@@ -5,6 +5,7 @@
 
 pub mod joint;
 
+use crate::checks::non_negative_params;
 use crate::map::{LineMap, MapSegment};
 use crate::ObservedLine;
 use alloc::vec::Vec;
@@ -435,7 +436,7 @@ impl Matcher {
                 WallCache::new(segment, errors.considered(j, &segment.line, mount, &pose))
             }));
         for (i, line) in observed.iter().enumerate() {
-            if let Err(e) = validate_observed(line) {
+            if let Err(e) = line.validate() {
                 out.status[i] = Status::Unmatched(RejectReason::InvalidLine(e));
                 continue;
             }
@@ -638,56 +639,4 @@ fn overlap(
         .min_overlap
         .min(params.min_overlap_fraction * (hi - lo));
     (overlap >= required).then_some(overlap)
-}
-
-/// Fails unless every `(value, name)` is finite and ≥ 0 (parameters of the matcher and
-/// the map builder).
-pub(crate) fn non_negative_params(params: &[(f64, &'static str)]) -> Result<(), Error> {
-    for &(v, what) in params {
-        if !v.is_finite() {
-            return Err(Error::NonFinite { what });
-        }
-        if v < 0.0 {
-            return Err(Error::OutOfRange {
-                what,
-                expected: ">= 0",
-            });
-        }
-    }
-    Ok(())
-}
-
-/// Fails unless the line, its end points and covariance are finite and the covariance is
-/// symmetric positive definite.
-pub(crate) fn validate_observed(observed: &ObservedLine) -> Result<(), Error> {
-    let values = [
-        observed.line.rho,
-        observed.line.beta,
-        observed.start.x,
-        observed.start.y,
-        observed.end.x,
-        observed.end.y,
-    ];
-    if values
-        .iter()
-        .chain(observed.covariance.iter())
-        .any(|v| !v.is_finite())
-    {
-        return Err(Error::NonFinite {
-            what: "observed line",
-        });
-    }
-    let c = &observed.covariance;
-    let scale = c.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
-    if (c[(0, 1)] - c[(1, 0)]).abs() > 1e-9 * scale {
-        return Err(Error::NotSymmetric {
-            what: "observed line covariance",
-        });
-    }
-    if c.cholesky().is_none() {
-        return Err(Error::NotPositiveDefinite {
-            what: "observed line covariance",
-        });
-    }
-    Ok(())
 }

@@ -4,9 +4,8 @@
 //! localizes in the grown map from then on. Without loop closures the walls of a place
 //! first seen with an error keep it; `ekf map build --slam` closes loops.
 
-use super::key_scans::is_key;
-use super::SlamParams;
-use crate::replay::{ReplayError, ScanHook};
+use super::{ReplayError, ScanHook};
+use crate::slam_config::SlamParams;
 use ekf_core::Pose2;
 use ekf_fusion::{Fuser, Scan, ScanFused};
 use lrf_lines::{LineMap, LocalizerError, MapBuilder};
@@ -58,7 +57,7 @@ impl ScanHook for MapGrowth {
         if filter.last_lines().is_empty()
             || self
                 .last_key
-                .is_some_and(|last| !is_key(&last, &pose, &self.params))
+                .is_some_and(|last| !self.params.is_key(&last, &pose))
         {
             return Ok(false);
         }
