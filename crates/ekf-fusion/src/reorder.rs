@@ -49,6 +49,19 @@ impl<T> Reorder<T> {
         self.lag_ns
     }
 
+    /// Sets the lag (ns) from now on: a live caller learns its devices' latencies as they
+    /// connect.
+    pub fn set_lag_ns(&mut self, lag_ns: u64) {
+        self.lag_ns = lag_ns;
+    }
+
+    /// Time has reached `now_ns` without an item: a live caller's clock, which tells as
+    /// well as a pushed item that nothing stamped more than the lag before it can still
+    /// come. Items whose turn that brings come out of [`pop_ready`](Self::pop_ready).
+    pub fn advance_to(&mut self, now_ns: u64) {
+        self.newest = self.newest.max(now_ns);
+    }
+
     /// Takes an item stamped `stamp`; refuses it if an item stamped after it was handed on
     /// already (it came more than the lag late, too late to be handed on in order).
     pub fn push(&mut self, stamp: u64, item: T) -> Result<(), TooLate<T>> {
@@ -145,6 +158,23 @@ mod tests {
             }
         );
         assert!(r.push(1000 * MS, "c").is_ok(), "the same stamp is not late");
+    }
+
+    #[test]
+    fn a_clock_releases_items_as_a_later_item_would() {
+        let mut r = Reorder::new(300 * MS);
+        r.push(1000 * MS, 'a').unwrap();
+        r.push(1100 * MS, 'b').unwrap();
+        r.advance_to(1299 * MS);
+        assert_eq!(r.pop_ready(), None);
+        r.advance_to(1350 * MS);
+        assert_eq!(r.pop_ready(), Some((1000 * MS, 'a')));
+        assert_eq!(r.pop_ready(), None);
+        r.set_lag_ns(200 * MS);
+        assert_eq!(r.pop_ready(), Some((1100 * MS, 'b')));
+        r.advance_to(1000 * MS);
+        assert!(r.push(1200 * MS, 'c').is_ok(), "time never runs back");
+        assert_eq!(r.pop_ready(), None);
     }
 
     proptest::proptest! {
