@@ -106,18 +106,26 @@ pub enum CliMode {
     LaserCompass,
 }
 
-/// The arguments of `ekf replay`.
+/// What the filter of `ekf replay`, `ekf compare` and `ekf live` is set up from.
 #[derive(Debug, Args)]
-pub struct ReplayArgs {
-    /// The ROS 2 bag: an .mcap or .db3 file, or a bag directory as `ros2 bag record`
-    /// writes it.
-    pub log: PathBuf,
+pub struct FilterInputs {
     /// Configuration file (TOML); `ekf config` prints the defaults.
     #[arg(long)]
     pub config: Option<PathBuf>,
     /// Line map (JSON). Without it the map is built from the first scan, as in the paper.
     #[arg(long)]
     pub map: Option<PathBuf>,
+}
+
+/// The arguments of `ekf replay`.
+#[derive(Debug, Args)]
+pub struct ReplayArgs {
+    /// The ROS 2 bag: an .mcap or .db3 file, or a bag directory as `ros2 bag record`
+    /// writes it.
+    pub log: PathBuf,
+    /// The configuration and the map.
+    #[command(flatten)]
+    pub inputs: FilterInputs,
     /// Which sensors the filter uses (the paper's four configurations).
     #[arg(long, value_enum, default_value_t = CliMode::LaserCompass)]
     pub mode: CliMode,
@@ -158,12 +166,9 @@ pub struct ReplayArgs {
 pub struct CompareArgs {
     /// The ROS 2 bag (.mcap, .db3 or a bag directory); it needs a reference trajectory (topics.ground_truth).
     pub log: PathBuf,
-    /// Configuration file (TOML); `ekf config` prints the defaults.
-    #[arg(long)]
-    pub config: Option<PathBuf>,
-    /// Line map (JSON). Without it the map is built from the first scan, as in the paper.
-    #[arg(long)]
-    pub map: Option<PathBuf>,
+    /// The configuration and the map.
+    #[command(flatten)]
+    pub inputs: FilterInputs,
     /// Start at the log's first reference pose instead of the configured initial pose.
     #[arg(long)]
     pub init_from_truth: bool,
@@ -256,12 +261,9 @@ pub struct LiveArgs {
     /// The GPS's serial port (NMEA).
     #[arg(long)]
     pub gps: Option<String>,
-    /// Configuration file (TOML); `ekf config` prints the defaults.
-    #[arg(long)]
-    pub config: Option<PathBuf>,
-    /// Line map (JSON). Without it the map is built from the first scan, as in the paper.
-    #[arg(long)]
-    pub map: Option<PathBuf>,
+    /// The configuration and the map.
+    #[command(flatten)]
+    pub inputs: FilterInputs,
     /// Which sensors the filter uses.
     #[arg(long, value_enum, default_value_t = CliMode::LaserCompass)]
     pub mode: CliMode,

@@ -128,13 +128,13 @@ fn main() -> ExitCode {
 }
 
 fn replay_command(a: ReplayArgs) -> Outcome {
-    let config = load_config(a.config.as_deref())?;
+    let config = load_config(a.inputs.config.as_deref())?;
     for path in [&a.out, &a.tum, &a.svg].into_iter().flatten() {
         create_parent(path)?;
     }
     let options = ReplayOptions {
         mode: a.mode.into(),
-        map: a.map,
+        map: a.inputs.map,
         init_from_truth: a.init_from_truth,
         out_mcap: a.out,
         tum: a.tum,
@@ -173,9 +173,9 @@ fn replay_command(a: ReplayArgs) -> Outcome {
 }
 
 fn compare_command(a: CompareArgs) -> Outcome {
-    let config = load_config(a.config.as_deref())?;
+    let config = load_config(a.inputs.config.as_deref())?;
     let options = compare::CompareOptions {
-        map: a.map,
+        map: a.inputs.map,
         init_from_truth: a.init_from_truth,
     };
     let comparison = compare::compare(&a.log, &config, &options)?;
@@ -242,7 +242,7 @@ fn simulate_command(a: SimulateArgs) -> Outcome {
 }
 
 fn live_command(a: LiveArgs) -> Outcome {
-    let config = load_config(a.config.as_deref())?;
+    let config = load_config(a.inputs.config.as_deref())?;
     if let Some(path) = &a.record {
         create_parent(path)?;
     }
@@ -251,7 +251,7 @@ fn live_command(a: LiveArgs) -> Outcome {
         base: a.base,
         gps: a.gps,
         record: a.record,
-        map: a.map,
+        map: a.inputs.map,
         mode: a.mode.into(),
     };
     let stop = stop_on_signals()?;
