@@ -14,7 +14,7 @@ pub enum LiveEvent {
     /// The estimate now, reported as wheel readings arrive (at most one per reading, each
     /// later than the one before, none until a first motion step has been fused): the
     /// fused state predicted through the wheel readings still held back (measurements
-    /// made before them may still be arriving; see [`run`]), as robot_localization's
+    /// made before them may still be arriving; see [`run`](super::run)), as robot_localization's
     /// `predict_to_current_time` does. The recording keeps the fused estimates.
     Pose {
         /// Time (ns since the Unix epoch): when the newest wheel reading held back was
