@@ -22,7 +22,7 @@ TRACKED = {
     "fhw": (0.09, 0.01),
     "edmonton": (0.11, 0.01),
     "freiburg-campus": (0.19, 0.01),
-    "csail": (0.31, 0.01),
+    "csail": (0.25, 0.01),
     "orebro": (5.0, 0.42),
 }
 

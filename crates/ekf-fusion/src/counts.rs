@@ -21,6 +21,9 @@ pub struct LineCounts {
     pub fused: u64,
     /// Matched lines refused by the re-evaluated gate.
     pub refused: u64,
+    /// Walls no fused line lay on, fitted from the scan points on them and fused
+    /// (`refit_missed_walls`).
+    pub refitted: u64,
 }
 
 /// Counts of a gated measurement's updates (position fixes).

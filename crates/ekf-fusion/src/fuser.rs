@@ -418,6 +418,7 @@ impl Fuser {
         l.rejected += r.rejected as u64;
         l.fused += r.fused as u64;
         l.refused += r.refused as u64;
+        l.refitted += r.refitted as u64;
         Ok(Fused::Scan(fused))
     }
 

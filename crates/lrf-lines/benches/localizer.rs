@@ -1,5 +1,6 @@
-//! The whole scan step, `Localizer::update_scan` (extract → match → update), on a
-//! 721-beam scan of the simulated room, with a given map and with a first-scan map.
+//! The whole scan step, `Localizer::update_scan` (extract → match → update → walls the
+//! lines missed), on a 721-beam scan of the simulated room, with a given map (with and
+//! without the last step) and with a first-scan map.
 
 #[path = "../tests/localizer_sim/mod.rs"]
 mod localizer_sim;
@@ -36,6 +37,11 @@ fn bench(c: &mut Criterion) {
     let p0 = Matrix3::identity() * 1e-4;
     let given = Localizer::new(config.clone(), start(), p0, map_of(&walls())).unwrap();
     bench_scan(c, "update_scan 721 beams", given);
+    // The same without step 4, the walls the lines missed fitted from the points: its cost.
+    let mut lines_only = config.clone();
+    lines_only.matching.refit_missed_walls = false;
+    let given = Localizer::new(lines_only, start(), p0, map_of(&walls())).unwrap();
+    bench_scan(c, "update_scan 721 beams, lines only", given);
     // The map's own errors carried in the filter (considered fit, estimated placement).
     let first_scan = Localizer::with_first_scan_map(config, start(), p0).unwrap();
     bench_scan(c, "update_scan 721 beams, first-scan map", first_scan);

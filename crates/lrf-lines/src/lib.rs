@@ -22,7 +22,7 @@ pub mod scan;
 pub use extract::{ExtractionError, ExtractionParams, LineExtractor};
 pub use localizer::{
     CompassConfig, CompassUpdate, LineFusion, Localizer, LocalizerConfig, LocalizerError,
-    ScanReport, ScanStage, StageClock,
+    ScanReport, ScanStage, StageClock, REFIT_AFTER_LINES,
 };
 pub use map::{LineMap, MapBuilder, MapBuilderParams, MapFormatError, MapSegment};
 pub use matching::{

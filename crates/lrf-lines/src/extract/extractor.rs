@@ -2,13 +2,14 @@
 //! scan to scan.
 
 use super::breakpoint::Breakpoint;
-use super::fit::{fit_trimmed, PointNoise};
+use super::fit::{fit_line, fit_trimmed, PointNoise};
 use super::merge::{merge_collinear, Candidate, MergeRule};
 use super::points::{collect, BeamTable, Points, Run, ScanPoints};
 use super::split::split_runs;
 use super::{ExtractionError, ExtractionParams};
 use crate::{LaserScan, ObservedLine};
 use alloc::vec::Vec;
+use core::ops::Range;
 use ekf_core::{chi_square_quantile, Line};
 use nalgebra::Point2;
 
@@ -120,6 +121,44 @@ impl LineExtractor {
             }
         }
         Ok(())
+    }
+}
+
+impl LineExtractor {
+    /// The line fitted (weighted least squares, as [`extract`](Self::extract) fits, without
+    /// trimming) to the points of the last extracted scan's beams `pieces` — ranges of
+    /// beam indices, in scan order, all of valid readings — with the end points the first
+    /// and last points projected onto it. `None` if the points do not determine a line,
+    /// a range lies outside the scan, or a point lies farther than `split_distance` from
+    /// the line (where extraction would split them: they are not one straight wall).
+    pub fn fit_beams(&self, pieces: &[Range<usize>]) -> Option<ObservedLine> {
+        let points = self.scan.points(&self.beams);
+        let fit = fit_line(&points, pieces, &self.merge_rule.noise)?;
+        let (s, c) = libm::sincos(fit.psi);
+        for piece in pieces {
+            let (xs, ys) = (points.x.get(piece.clone())?, points.y.get(piece.clone())?);
+            let straight = xs
+                .iter()
+                .zip(ys)
+                .all(|(&x, &y)| libm::fabs(x * c + y * s - fit.r) <= self.params.split_distance);
+            if !straight {
+                return None;
+            }
+        }
+        observed_line(
+            &points,
+            pieces,
+            &Candidate {
+                support: 0..pieces.len(),
+                fit,
+            },
+        )
+    }
+
+    /// The last extracted scan's beams as unit directions in the sensor frame,
+    /// `(cos φ_i, sin φ_i)`.
+    pub(crate) fn beam_directions(&self) -> (&[f64], &[f64]) {
+        self.beams.directions()
     }
 }
 

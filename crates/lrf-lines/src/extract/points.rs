@@ -19,6 +19,11 @@ pub(crate) struct BeamTable {
 }
 
 impl BeamTable {
+    /// `(cos φ_i, sin φ_i)` of every beam.
+    pub fn directions(&self) -> (&[f64], &[f64]) {
+        (&self.cos, &self.sin)
+    }
+
     /// Makes the table match `scan`'s beam geometry.
     pub fn update(&mut self, scan: &LaserScan<'_>) {
         let key = (scan.angle_min.to_bits(), scan.angle_increment.to_bits());

@@ -7,6 +7,7 @@ mod compass_lockout;
 mod config;
 mod error;
 mod map_errors;
+mod missed_walls;
 
 pub use config::{CompassConfig, LocalizerConfig};
 pub use error::LocalizerError;
@@ -15,17 +16,22 @@ use compass_follow::{CompassFollow, FOLLOW_PROBABILITY};
 use compass_lockout::{CompassLockout, Rejected};
 use config::ValidatedParts;
 use map_errors::MapErrors;
+use missed_walls::{MissedWalls, Tracing};
 
 use crate::relocalize::{
     fit_poses, relocalize, Hypothesis, PoseFits, Relocalization, RelocalizeParams, SearchWindow,
 };
 use crate::{LaserScan, LineExtractor, LineMap, MatchResult, Matcher, ObservedLine, WallErrors};
 use alloc::vec::Vec;
+use core::ops::Range;
 use ekf_core::{
     angle_diff, ChiSquareGate, Compass, Considered, Ekf, LaserLine, Measurement, Motion, Pose2,
     Position, UpdateOutcome, WheelSpeeds,
 };
 use nalgebra::{Matrix2, Matrix3, Vector3};
+
+/// Fused lines a scan needs before the walls they missed are fitted from its points.
+pub const REFIT_AFTER_LINES: usize = 2;
 
 /// What happened to one matched line during the sequential update.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -81,6 +87,9 @@ pub struct ScanReport {
     pub fused: usize,
     /// Matched lines that failed the gate when re-evaluated at the updated state.
     pub refused: usize,
+    /// Walls no fused line lay on, fitted from the scan points on them and fused (see
+    /// `missed_walls.rs`).
+    pub refitted: usize,
     /// `true` if this scan's lines became the map (see [`Localizer::with_first_scan_map`]);
     /// nothing is fused then.
     pub map_built: bool,
@@ -122,7 +131,15 @@ impl StageClock for () {
 /// 3. fuse the matches one at a time in increasing order of their NIS at `x⁻`: each is
 ///    re-linearised at the current state (after the lines fused before it), gated again
 ///    with the same threshold, and fused with a Joseph-form update if it passes;
-///    otherwise it is counted as refused and the state is left as it was.
+///    otherwise it is counted as refused and the state is left as it was;
+/// 4. if at least [`REFIT_AFTER_LINES`] lines were fused (and
+///    [`MatchParams::refit_missed_walls`](crate::MatchParams::refit_missed_walls) is on):
+///    trace the beams not on a fused line to the first wall they meet at the updated
+///    state, keep those whose point lies on it (1-dof chi-square gate), and fit each wall
+///    no fused line lies on from its pieces of at least three consecutive beams, as
+///    extraction fits a line; fuse each such line as in step 3
+///    ([`ScanReport::refitted`]). Split-and-merge drops a wall seen only in short pieces
+///    (behind clutter, at gaps, very oblique); its points still locate the robot.
 ///
 /// For independent line noise, sequential fusion equals the paper's stacked update
 /// (eq. 16) up to re-linearisation, and a line that no longer fits after the others have
@@ -191,6 +208,10 @@ pub struct Localizer {
     lines: Vec<ObservedLine>,
     matches: MatchResult,
     fusions: Vec<LineFusion>,
+    /// `χ²₁` at the matching's gate probability: whether a scan point lies on a wall.
+    point_gate: f64,
+    missed_walls: MissedWalls,
+    fused_lines: Vec<ObservedLine>,
 }
 
 impl Localizer {
@@ -210,6 +231,11 @@ impl Localizer {
             extractor,
         } = config.validated_parts()?;
         let ekf = Ekf::new(initial_pose, initial_covariance).map_err(LocalizerError::Filter)?;
+        let point_gate = ekf_core::chi_square_quantile(config.matching.gate_probability, 1)
+            .map_err(|error| LocalizerError::Config {
+                group: "matching",
+                error,
+            })?;
         Ok(Self {
             config,
             ekf,
@@ -232,6 +258,9 @@ impl Localizer {
             lines: Vec::new(),
             matches: MatchResult::new(),
             fusions: Vec::new(),
+            point_gate,
+            missed_walls: MissedWalls::default(),
+            fused_lines: Vec::new(),
         })
     }
 
@@ -567,7 +596,7 @@ impl Localizer {
             report.map_built = true;
             return Ok(report);
         }
-        self.match_and_fuse(report, clock)
+        self.match_and_fuse(report, Some(scan), clock)
     }
 
     /// The laser step for lines already extracted (sensor frame, as
@@ -586,14 +615,16 @@ impl Localizer {
             extracted: lines.len(),
             ..ScanReport::default()
         };
-        self.match_and_fuse(report, &mut ())
+        self.match_and_fuse(report, None, &mut ())
     }
 
     /// Matches [`last_lines`](Self::last_lines) against the map at the predicted state
-    /// and fuses the matches (steps 2 and 3 of a scan update).
+    /// and fuses the matches (steps 2 and 3 of a scan update), then, given the scan, the
+    /// walls its lines missed (step 4).
     fn match_and_fuse(
         &mut self,
         mut report: ScanReport,
+        scan: Option<&LaserScan<'_>>,
         clock: &mut impl StageClock,
     ) -> Result<ScanReport, LocalizerError> {
         self.matcher.match_lines_with(
@@ -607,7 +638,15 @@ impl Localizer {
         clock.stage_done(ScanStage::Matching);
         report.matched = self.matches.matches().len();
         report.rejected = self.matches.rejections().len();
-        let fused = self.atomically(|localizer| localizer.fuse_matches(&mut report));
+        let fused = self.atomically(|localizer| {
+            localizer.fuse_matches(&mut report)?;
+            match scan {
+                Some(scan) if localizer.refits(&report) => {
+                    localizer.fuse_missed_walls(scan, &mut report)
+                }
+                _ => Ok(()),
+            }
+        });
         clock.stage_done(ScanStage::Update);
         if let Err(e) = fused {
             self.fusions.clear();
@@ -655,6 +694,86 @@ impl Localizer {
         }
         self.map_errors.move_walls(&mut self.map);
         Ok(())
+    }
+
+    /// Whether step 4 runs after the lines of `report` were fused: when configured, and
+    /// only once at least [`REFIT_AFTER_LINES`] lines agreed with the state, as a pose
+    /// the scan's own lines do not confirm would find walls for its points where there
+    /// are none.
+    fn refits(&self, report: &ScanReport) -> bool {
+        self.config.matching.refit_missed_walls && report.fused >= REFIT_AFTER_LINES
+    }
+
+    /// Step 4 of a scan update: the walls no fused line lies on that enough of the scan's
+    /// points do (see `missed_walls.rs`), each fitted as a line and fused with the gate.
+    fn fuse_missed_walls(
+        &mut self,
+        scan: &LaserScan<'_>,
+        report: &mut ScanReport,
+    ) -> Result<(), ekf_core::Error> {
+        let mut missed = core::mem::take(&mut self.missed_walls);
+        let mut fused_lines = core::mem::take(&mut self.fused_lines);
+        fused_lines.clear();
+        fused_lines.extend(
+            self.fusions
+                .iter()
+                .filter(|f| f.accepted)
+                .filter_map(|f| self.lines.get(f.observed).copied()),
+        );
+        let extraction = self.extractor.params();
+        let (min_points, min_length) = (extraction.min_points, extraction.min_length);
+        let at = Tracing {
+            pose: self.ekf.pose(),
+            covariance: self.ekf.covariance(),
+            mount: self.config.laser_mount,
+            range_var: extraction.range_sigma * extraction.range_sigma,
+            map_var: self.config.matching.map_sigma_r * self.config.matching.map_sigma_r,
+            gate: self.point_gate,
+        };
+        let fusions = &self.fusions;
+        missed.find(
+            scan,
+            self.extractor.beam_directions(),
+            &self.map,
+            &at,
+            &fused_lines,
+            |w| fusions.iter().any(|f| f.accepted && f.map == w),
+        );
+        let mut result = Ok(());
+        for k in 0..missed.len() {
+            let Some((wall, runs)) = missed.get(k) else {
+                continue;
+            };
+            let points: usize = runs.iter().map(Range::len).sum();
+            if points < min_points {
+                continue;
+            }
+            let (Some(line), Some(map_wall)) =
+                (self.extractor.fit_beams(runs), self.map.segments.get(wall))
+            else {
+                continue;
+            };
+            if line.length() < min_length {
+                continue;
+            }
+            let model = LaserLine {
+                observed: line.line,
+                covariance: self.config.matching.line_noise(&line.covariance),
+                map_line: map_wall.line,
+                mount: self.config.laser_mount,
+            };
+            match self.fuse_line(wall, &model) {
+                Ok(outcome) if outcome.accepted => report.refitted += 1,
+                Ok(_) => {}
+                Err(e) => {
+                    result = Err(e);
+                    break;
+                }
+            }
+        }
+        self.missed_walls = missed;
+        self.fused_lines = fused_lines;
+        result
     }
 
     /// Fuses one line matched to wall `wall`, with the wall's error considered if the map

@@ -67,6 +67,10 @@ pub struct MatchParams {
     pub map_sigma_r: f64,
     /// The same for the line's direction (rad), added to `R_ψψ`. Default 1°.
     pub map_sigma_psi: f64,
+    /// After a scan's matched lines are fused (at least two of them), fit and fuse the
+    /// walls they missed from the scan points that lie on them (see
+    /// [`crate::Localizer`]). Default `true`.
+    pub refit_missed_walls: bool,
 }
 
 impl Default for MatchParams {
@@ -77,6 +81,7 @@ impl Default for MatchParams {
             min_overlap_fraction: 0.5,
             map_sigma_r: 0.02,
             map_sigma_psi: 1.0_f64.to_radians(),
+            refit_missed_walls: true,
         }
     }
 }

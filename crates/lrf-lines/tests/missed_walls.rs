@@ -1,0 +1,118 @@
+//! The scan update's last step: walls the line extraction missed, fitted from the scan
+//! points that lie on them and fused (`refit_missed_walls`).
+
+mod matching_support;
+
+use ekf_core::Pose2;
+use lrf_lines::{LaserScan, LineMap, Localizer, LocalizerConfig, ScanReport};
+use matching_support::{map_of, ray_cast, Beams, Wall};
+use nalgebra::{Matrix3, Point2, Vector3};
+
+/// A corridor along x: the end wall at x = 3, the walls at y = 2 and y = −2.
+fn corridor() -> Vec<Wall> {
+    vec![
+        (Point2::new(3.0, -2.5), Point2::new(3.0, 2.5)),
+        (Point2::new(-2.0, 2.0), Point2::new(3.0, 2.0)),
+        (Point2::new(-2.0, -2.0), Point2::new(3.0, -2.0)),
+    ]
+}
+
+/// 181 beams, 1° apart, from −90° to 90°.
+const BEAMS: Beams = Beams {
+    angle_min: -std::f64::consts::FRAC_PI_2,
+    increment: std::f64::consts::PI / 180.0,
+    count: 181,
+    range_max: 10.0,
+};
+
+/// The exact ranges from the origin (laser at the robot's origin), with the wall at
+/// y = −2 seen only in pieces of `piece` beams, each followed by as many without return:
+/// too few points each for the extraction's six.
+fn ranges(piece: usize) -> Vec<f32> {
+    let mut r = ray_cast(&corridor(), &Pose2::identity(), &BEAMS, 0.0, None);
+    for (i, range) in r.iter_mut().enumerate() {
+        let bearing = BEAMS.angle_min + i as f64 * BEAMS.increment;
+        // The wall at y = −2 is what the beams between −90° and −34° meet first.
+        if bearing < (-2.0_f64).atan2(3.0) && (i / piece) % 2 == 1 {
+            *range = f32::INFINITY;
+        }
+    }
+    r
+}
+
+fn scan(ranges: &[f32]) -> LaserScan<'_> {
+    LaserScan {
+        angle_min: BEAMS.angle_min,
+        angle_increment: BEAMS.increment,
+        range_min: 0.05,
+        range_max: BEAMS.range_max,
+        ranges,
+    }
+}
+
+/// One scan update from (0, 0.03, 0) with σ = 0.1 m, 2°, against `map`; the true pose is
+/// the origin.
+fn update(map: LineMap, ranges: &[f32], refit: bool) -> (ScanReport, Localizer) {
+    let mut config = LocalizerConfig::default();
+    config.matching.refit_missed_walls = refit;
+    let p = Matrix3::from_diagonal(&Vector3::new(0.01, 0.01, 2.0_f64.to_radians().powi(2)));
+    let mut localizer = Localizer::new(config, Pose2::new(0.0, 0.03, 0.0), p, map).unwrap();
+    let report = localizer.update_scan(&scan(ranges)).unwrap();
+    (report, localizer)
+}
+
+#[test]
+fn a_wall_seen_only_in_short_pieces_is_fitted_from_them_and_fused() {
+    let ranges = ranges(4);
+    let (without, before) = update(map_of(&corridor()), &ranges, false);
+    let (with, after) = update(map_of(&corridor()), &ranges, true);
+    // The end wall and the wall at y = 2 are lines; the pieces of y = −2 are not.
+    assert_eq!(
+        (without.extracted, without.fused, without.refitted),
+        (2, 2, 0)
+    );
+    assert_eq!((with.extracted, with.fused, with.refitted), (2, 2, 1));
+    // The second wall along y halves (about) the lateral variance, and the estimate is
+    // within 3σ of the truth.
+    let (var_before, var_after) = (before.covariance()[(1, 1)], after.covariance()[(1, 1)]);
+    assert!(var_after < 0.75 * var_before, "{var_after} vs {var_before}");
+    assert!(
+        after.pose().y.abs() < 3.0 * var_after.sqrt(),
+        "{:?}",
+        after.pose()
+    );
+    let p = after.covariance();
+    assert!((p - p.transpose()).abs().max() <= 1e-12 && p.cholesky().is_some());
+}
+
+#[test]
+fn points_off_every_wall_are_not_forced_onto_one() {
+    // The map's wall is 0.4 m from where the laser sees it: about 10σ, so no beam's point
+    // lies on it.
+    let mut walls = corridor();
+    walls[2] = (Point2::new(-2.0, -2.4), Point2::new(3.0, -2.4));
+    let (report, _) = update(map_of(&walls), &ranges(4), true);
+    assert_eq!((report.extracted, report.fused, report.refitted), (2, 2, 0));
+}
+
+#[test]
+fn pieces_of_fewer_than_three_beams_are_not_a_wall() {
+    let (report, _) = update(map_of(&corridor()), &ranges(2), true);
+    assert_eq!((report.fused, report.refitted), (2, 0));
+}
+
+#[test]
+fn without_two_fused_lines_nothing_is_refitted() {
+    // Only the end wall is a line: one fused line does not confirm the pose enough to
+    // trust where the other points fall.
+    let walls = [corridor()[0], corridor()[2]];
+    let mut ranges = ray_cast(&walls, &Pose2::identity(), &BEAMS, 0.0, None);
+    let pieces = self::ranges(4);
+    for (r, p) in ranges.iter_mut().zip(&pieces) {
+        if p.is_infinite() {
+            *r = f32::INFINITY;
+        }
+    }
+    let (report, _) = update(map_of(&walls), &ranges, true);
+    assert_eq!((report.extracted, report.fused, report.refitted), (1, 1, 0));
+}
