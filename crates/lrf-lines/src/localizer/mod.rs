@@ -667,19 +667,12 @@ impl Localizer {
     fn fuse_matches(&mut self, report: &mut ScanReport) -> Result<(), ekf_core::Error> {
         for i in 0..self.matches.matches().len() {
             let m = self.matches.matches()[i];
-            self.map_errors.move_wall(m.map, &mut self.map);
-            let (Some(line), Some(wall)) =
-                (self.lines.get(m.observed), self.map.segments.get(m.map))
-            else {
+            let Some(line) = self.lines.get(m.observed).copied() else {
                 continue;
             };
-            let model = LaserLine {
-                observed: line.line,
-                covariance: self.config.matching.line_noise(&line.covariance),
-                map_line: wall.line,
-                mount: self.config.laser_mount,
+            let Some(outcome) = self.fuse_line(m.map, &line)? else {
+                continue;
             };
-            let outcome = self.fuse_line(m.map, &model)?;
             if outcome.accepted {
                 report.fused += 1;
             } else {
@@ -748,22 +741,14 @@ impl Localizer {
             if points < min_points {
                 continue;
             }
-            let (Some(line), Some(map_wall)) =
-                (self.extractor.fit_beams(runs), self.map.segments.get(wall))
-            else {
+            let Some(line) = self.extractor.fit_beams(runs) else {
                 continue;
             };
             if line.length() < min_length {
                 continue;
             }
-            let model = LaserLine {
-                observed: line.line,
-                covariance: self.config.matching.line_noise(&line.covariance),
-                map_line: map_wall.line,
-                mount: self.config.laser_mount,
-            };
-            match self.fuse_line(wall, &model) {
-                Ok(outcome) if outcome.accepted => report.refitted += 1,
+            match self.fuse_line(wall, &line) {
+                Ok(Some(outcome)) if outcome.accepted => report.refitted += 1,
                 Ok(_) => {}
                 Err(e) => {
                     result = Err(e);
@@ -771,19 +756,32 @@ impl Localizer {
                 }
             }
         }
+        self.map_errors.move_walls(&mut self.map);
         self.missed_walls = missed;
         self.fused_lines = fused_lines;
         result
     }
 
-    /// Fuses one line matched to wall `wall`, with the wall's error considered if the map
-    /// has an error model (a first-scan map), and carries the state's correlation with
-    /// the walls along.
+    /// Fuses the observed `line` (sensor frame) as a sighting of wall `wall`, gated: a
+    /// first-scan map's wall is first moved to the map's current placement, its error is
+    /// considered, and the state's correlation with the walls is carried along; the noise
+    /// is the line's plus the map's ([`MatchParams::line_noise`](crate::MatchParams::line_noise)).
+    /// `None` if there is no such wall.
     fn fuse_line(
         &mut self,
         wall: usize,
-        model: &LaserLine<f64>,
-    ) -> Result<UpdateOutcome<f64>, ekf_core::Error> {
+        line: &ObservedLine,
+    ) -> Result<Option<UpdateOutcome<f64>>, ekf_core::Error> {
+        self.map_errors.move_wall(wall, &mut self.map);
+        let Some(map_wall) = self.map.segments.get(wall) else {
+            return Ok(None);
+        };
+        let model = LaserLine {
+            observed: line.line,
+            covariance: self.config.matching.line_noise(&line.covariance),
+            map_line: map_wall.line,
+            mount: self.config.laser_mount,
+        };
         let gate = Some(self.matcher.gate());
         let pose = self.ekf.pose();
         let mount = &self.config.laser_mount;
@@ -791,11 +789,11 @@ impl Localizer {
             .map_errors
             .considered(wall, &model.map_line, mount, &pose);
         let Some(considered) = considered else {
-            return self.ekf.update(model, gate);
+            return self.ekf.update(&model, gate).map(Some);
         };
-        let update = self.ekf.update_considering(model, &considered, gate)?;
+        let update = self.ekf.update_considering(&model, &considered, gate)?;
         self.map_errors.line_fused(wall, &considered, &update)?;
-        Ok(update.outcome)
+        Ok(Some(update.outcome))
     }
 
     /// Empties the match result (after a scan that was not matched).
