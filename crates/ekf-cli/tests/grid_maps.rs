@@ -67,7 +67,6 @@ fn the_aces_map_drawn_as_a_grid_and_read_back_localizes_within_2_cm_of_it() {
     let (back, summary) = import(&yaml);
     assert_eq!(summary.unknown_cells, 0, "{summary:?}");
     let (json, grid) = (rmse_with(&map_path), rmse_with(&back));
-    eprintln!("exported grid: RMSE {grid:.4} m, line map {json:.4} m");
     assert!(
         grid - json <= 0.02,
         "RMSE {grid:.4} m with the grid's walls, {json:.4} m with the line map"
@@ -89,7 +88,6 @@ fn a_grid_mapped_from_the_aces_scans_localizes_within_7_cm_of_the_line_map() {
         "{summary:?}"
     );
     let (json, grid) = (rmse_with(&testdata("aces-map.json")), rmse_with(&walls));
-    eprintln!("GMapping-style grid: RMSE {grid:.4} m, line map {json:.4} m");
     assert!(
         grid - json <= 0.07,
         "RMSE {grid:.4} m with the grid's walls, {json:.4} m with the line map"

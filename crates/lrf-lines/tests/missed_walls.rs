@@ -41,11 +41,15 @@ fn ranges(piece: usize) -> Vec<f32> {
 }
 
 fn scan(ranges: &[f32]) -> LaserScan<'_> {
+    scan_of(&BEAMS, ranges)
+}
+
+fn scan_of<'a>(beams: &Beams, ranges: &'a [f32]) -> LaserScan<'a> {
     LaserScan {
-        angle_min: BEAMS.angle_min,
-        angle_increment: BEAMS.increment,
+        angle_min: beams.angle_min,
+        angle_increment: beams.increment,
         range_min: 0.05,
-        range_max: BEAMS.range_max,
+        range_max: beams.range_max,
         ranges,
     }
 }
@@ -53,11 +57,15 @@ fn scan(ranges: &[f32]) -> LaserScan<'_> {
 /// One scan update from (0, 0.03, 0) with σ = 0.1 m, 2°, against `map`; the true pose is
 /// the origin.
 fn update(map: LineMap, ranges: &[f32], refit: bool) -> (ScanReport, Localizer) {
+    update_with(map, &scan(ranges), refit)
+}
+
+fn update_with(map: LineMap, scan: &LaserScan<'_>, refit: bool) -> (ScanReport, Localizer) {
     let mut config = LocalizerConfig::default();
     config.matching.refit_missed_walls = refit;
     let p = Matrix3::from_diagonal(&Vector3::new(0.01, 0.01, 2.0_f64.to_radians().powi(2)));
     let mut localizer = Localizer::new(config, Pose2::new(0.0, 0.03, 0.0), p, map).unwrap();
-    let report = localizer.update_scan(&scan(ranges)).unwrap();
+    let report = localizer.update_scan(scan).unwrap();
     (report, localizer)
 }
 
@@ -115,4 +123,34 @@ fn without_two_fused_lines_nothing_is_refitted() {
     }
     let (report, _) = update(map_of(&walls), &ranges, true);
     assert_eq!((report.extracted, report.fused, report.refitted), (1, 1, 0));
+}
+
+#[test]
+fn a_wall_across_the_seam_of_a_scan_all_round_is_one_wall() {
+    // A room 5 m by 4 m around the origin, seen all round: beam i looks at (i − 180)°, so
+    // beams 359 (179°) and 0 (−180°) are beside each other on the wall behind, x = −2.
+    let beams = Beams {
+        angle_min: -std::f64::consts::PI,
+        increment: std::f64::consts::PI / 180.0,
+        count: 360,
+        range_max: 10.0,
+    };
+    let mut room = corridor();
+    room.push((Point2::new(-2.0, -2.5), Point2::new(-2.0, 2.5)));
+    let mut ranges = ray_cast(&room, &Pose2::identity(), &beams, 0.0, None);
+    // The wall behind (bearings beyond ±135°) returns on beams 349..=359 (170° to 179°:
+    // 0.35 m, too short a line) and on beams 0 and 1 (−180°, −179°: too few for a piece
+    // of their own) only; together they span 0.42 m, long enough.
+    for (i, r) in ranges.iter_mut().enumerate() {
+        let behind = !(45..=315).contains(&i);
+        if behind && !(349..360).contains(&i) && i > 1 {
+            *r = f32::INFINITY;
+        }
+    }
+    let scan = scan_of(&beams, &ranges);
+    let (report, localizer) = update_with(map_of(&room), &scan, true);
+    // The front and the two side walls are lines; the wall behind is fitted from the 13
+    // beams on both sides of the seam.
+    assert_eq!((report.fused, report.refitted), (3, 1));
+    assert!(localizer.pose().x.abs() < 0.01, "{:?}", localizer.pose());
 }

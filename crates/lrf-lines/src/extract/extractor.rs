@@ -131,7 +131,7 @@ impl LineExtractor {
     /// and last points projected onto it. `None` if the points do not determine a line,
     /// a range lies outside the scan, or a point lies farther than `split_distance` from
     /// the line (where extraction would split them: they are not one straight wall).
-    pub fn fit_beams(&self, pieces: &[Range<usize>]) -> Option<ObservedLine> {
+    pub(crate) fn fit_beams(&self, pieces: &[Range<usize>]) -> Option<ObservedLine> {
         let points = self.scan.points(&self.beams);
         let fit = fit_line(&points, pieces, &self.merge_rule.noise)?;
         let (s, c) = libm::sincos(fit.psi);

@@ -193,8 +193,38 @@ impl MissedWalls {
                 _ => self.pieces.push((w, i..i + 1)),
             }
         }
-        self.pieces.retain(|(_, run)| run.len() >= MIN_RUN);
-        self.pieces.sort_unstable_by_key(|(w, run)| (*w, run.start));
+        let n = self.hits.len();
+        // A wall across the seam of a scan that goes all round: its piece at the end and
+        // its piece at the start are one, and its pieces are in scan order from the
+        // seam's far side (a wall subtends less than half a turn, so its beams in the
+        // last half of the scan come before those in the first).
+        let seam_wall = match (self.pieces.first(), self.pieces.last()) {
+            (Some((w0, head)), Some((w1, tail)))
+                if self.pieces.len() > 1
+                    && w0 == w1
+                    && head.start == 0
+                    && tail.end == n
+                    && full_turn(scan, n) =>
+            {
+                Some((*w0, head.len() + tail.len()))
+            }
+            _ => None,
+        };
+        self.pieces.retain(|(w, run)| {
+            run.len() >= MIN_RUN
+                || seam_wall.is_some_and(|(seam, joined)| {
+                    *w == seam && joined >= MIN_RUN && (run.start == 0 || run.end == n)
+                })
+        });
+        let in_scan_order = |w: usize, run: &Range<usize>| -> isize {
+            let start = run.start as isize;
+            match seam_wall {
+                Some((seam, _)) if seam == w && 2 * run.start >= n => start - n as isize,
+                _ => start,
+            }
+        };
+        self.pieces
+            .sort_unstable_by_key(|(w, run)| (*w, in_scan_order(*w, run)));
         self.runs.clear();
         self.groups.clear();
         for (w, run) in &self.pieces {
@@ -253,24 +283,45 @@ fn beams_between(
         } else {
             below.saturating_sub(1)
         };
-        let end = ((to / step) as usize).saturating_add(1).min(last);
+        let end = if to < 0.0 {
+            0
+        } else {
+            ((to / step) as usize).saturating_add(1).min(last)
+        };
         (first <= end && n > 0).then_some(first..end + 1)
     };
     let main = index(lo, lo + span);
-    let wrapped = (lo + span > tau)
+    // Past the last beam, and, on a scan that goes all round, the padding beam past
+    // either end too, continue at the other end.
+    let full = full_turn(scan, n);
+    let wrapped = (lo + span > tau || (full && lo + span + step > tau))
         .then(|| index(0.0, lo + span - tau))
         .flatten();
+    let before_first = (full && lo <= 0.0 && n > 0).then_some(last);
     main.into_iter()
         .flatten()
         .chain(wrapped.into_iter().flatten())
+        .chain(before_first)
 }
 
-/// `angle` moved by whole turns into `[lo, lo + 2π)`, for an angle within a few turns of
-/// it (a loop of additions: cheaper than a division for the bearings here).
+/// Whether the first `n` beams of `scan` go all round, the last beside the first.
+fn full_turn(scan: &LaserScan<'_>, n: usize) -> bool {
+    let step = libm::fabs(scan.angle_increment);
+    n as f64 * step >= core::f64::consts::TAU - 0.5 * step
+}
+
+/// `angle` moved by whole turns into `[lo, lo + 2π)`: by a loop of additions for an angle
+/// within a few turns of it (the bearings here; cheaper than a division), by the IEEE
+/// remainder for one farther off (a scan's `angle_min` may be any finite number).
 fn reduce(mut angle: f64, lo: f64) -> f64 {
     let tau = core::f64::consts::TAU;
     if !angle.is_finite() {
         return lo;
+    }
+    if libm::fabs(angle - lo) > 4.0 * tau {
+        // In [lo, lo + 2π] up to rounding, which the loops below settle.
+        angle =
+            lo + core::f64::consts::PI + libm::remainder(angle - lo - core::f64::consts::PI, tau);
     }
     while angle < lo {
         angle += tau;
@@ -405,5 +456,48 @@ mod tests {
         );
         // Behind the scanner: no beam.
         assert!(between(&scan, &origin, at(150.0), at(-150.0)).is_empty());
+    }
+
+    #[test]
+    fn on_a_scan_all_round_the_beam_beside_the_seam_is_the_one_across_it() {
+        // Beam i looks at (i − 180)°: beam 359 (179°) is beside beam 0 (−180°).
+        let ranges = [1.0_f32; 360];
+        let scan = header(-core::f64::consts::PI, 1.0_f64.to_radians(), &ranges);
+        let at = |deg: f64| (libm::cos(deg.to_radians()), libm::sin(deg.to_radians()));
+        let origin = Pose2::identity();
+        // 178.5° to 179.5°: beam 359, with 358 before it and 0 after it.
+        assert_eq!(between(&scan, &origin, at(178.5), at(179.5)), [0, 358, 359]);
+        // From exactly −180° to −179.5°: beam 0, with 359 before it and 1 after it.
+        assert_eq!(between(&scan, &origin, at(-180.0), at(-179.5)), [0, 1, 359]);
+        // A scan of less than a turn does not wrap: beam 0 looks at −180°, beam 349 at
+        // 169°.
+        let part = header(-core::f64::consts::PI, 1.0_f64.to_radians(), &ranges[..350]);
+        assert_eq!(between(&part, &origin, at(168.5), at(168.9)), [348, 349]);
+        assert_eq!(between(&part, &origin, at(-180.0), at(-179.5)), [0, 1]);
+    }
+
+    #[test]
+    fn any_finite_angle_is_reduced_to_within_a_turn() {
+        let tau = core::f64::consts::TAU;
+        for angle in [1e300, -1e300, 5e16, -7.3e17, 1234.5, -0.1, 0.0, tau] {
+            for lo in [0.0, -core::f64::consts::PI] {
+                let reduced = reduce(angle, lo);
+                assert!((lo..lo + tau).contains(&reduced), "{angle} → {reduced}");
+            }
+        }
+        // Far off, the remainder is exact: 1000 turns and 1 rad is 1 rad.
+        assert!(libm::fabs(reduce(1000.0 * tau + 1.0, 0.0) - 1.0) < 1e-9);
+        // A scan whose first beam is given a million turns on looks the same way.
+        let ranges = [1.0_f32; 360];
+        let far = header(
+            -core::f64::consts::PI + 1e6 * tau,
+            1.0_f64.to_radians(),
+            &ranges,
+        );
+        let at = |deg: f64| (libm::cos(deg.to_radians()), libm::sin(deg.to_radians()));
+        assert_eq!(
+            between(&far, &Pose2::identity(), at(10.5), at(13.5)),
+            [190, 191, 192, 193, 194]
+        );
     }
 }
