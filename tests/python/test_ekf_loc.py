@@ -220,7 +220,7 @@ def test_localizer_fuses_a_scan_against_a_map(room_map):
     loc = ekf_loc.Localizer(start, np.diag([0.01, 0.01, 0.003]), room_map)
     report = loc.update_scan(room_scan(POSE), ANGLE_MIN, ANGLE_INCREMENT, 0.05, 30.0)
     assert report == {"extracted": 4, "matched": 4, "rejected": 0, "fused": 4,
-                      "refused": 0, "refitted": 0, "map_built": False}
+                      "refused": 0, "merged": 0, "refitted": 0, "map_built": False}
     assert math.dist(loc.state[:2], POSE[:2]) < 0.01
     assert abs(angle_diff(loc.state[2], POSE[2])) < math.radians(0.3)
     assert len(loc.last_lines) == 4 and len(loc.last_fusions) == 4

@@ -386,7 +386,8 @@ def test_replay_diagnostics(replayed):
         values = {kv.key: kv.value for kv in status.values}
         if status.name == "ekf/scan":
             assert list(values) == ["lines_extracted", "lines_matched", "lines_rejected",
-                                    "lines_fused", "lines_refused", "walls_refitted", "nis",
+                                    "lines_fused", "lines_refused", "lines_merged", "walls_refitted",
+                                    "nis",
                                     "rejections"]
             assert len([r for r in values["rejections"].split("; ") if r]) == int(
                 values["lines_rejected"])

@@ -24,6 +24,9 @@ pub struct LineCounts {
     /// Walls no fused line lay on, fitted from the scan points on them and fused
     /// (`refit_missed_walls`).
     pub refitted: u64,
+    /// Observed lines fitted together with another line on the same wall and fused with
+    /// it as one.
+    pub merged: u64,
 }
 
 /// Counts of a gated measurement's updates (position fixes).

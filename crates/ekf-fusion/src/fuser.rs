@@ -419,6 +419,7 @@ impl Fuser {
         l.fused += r.fused as u64;
         l.refused += r.refused as u64;
         l.refitted += r.refitted as u64;
+        l.merged += r.merged as u64;
         Ok(Fused::Scan(fused))
     }
 

@@ -150,6 +150,7 @@ impl Localizer {
         d.set_item("rejected", report.rejected)?;
         d.set_item("fused", report.fused)?;
         d.set_item("refused", report.refused)?;
+        d.set_item("merged", report.merged)?;
         d.set_item("refitted", report.refitted)?;
         d.set_item("map_built", report.map_built)?;
         Ok(d)

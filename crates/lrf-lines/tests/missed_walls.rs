@@ -1,5 +1,6 @@
-//! The scan update's last step: walls the line extraction missed, fitted from the scan
-//! points that lie on them and fused (`refit_missed_walls`).
+//! What the scan update takes from the scan beyond its lines: pieces of one wall fitted
+//! together (step 3, `ScanReport::merged`), and walls the line extraction missed, fitted
+//! from the scan points that lie on them (step 4, `refit_missed_walls`).
 
 mod matching_support;
 
@@ -153,4 +154,62 @@ fn a_wall_across_the_seam_of_a_scan_all_round_is_one_wall() {
     // beams on both sides of the seam.
     assert_eq!((report.fused, report.refitted), (3, 1));
     assert!(localizer.pose().x.abs() < 0.01, "{:?}", localizer.pose());
+}
+
+/// The corridor's ranges with the wall at y = −2 seen in two pieces, the beams between
+/// −70° and −50° without return (a door 1 m wide): extraction keeps them two lines.
+fn door_ranges() -> Vec<f32> {
+    let mut r = ray_cast(&corridor(), &Pose2::identity(), &BEAMS, 0.0, None);
+    for (i, range) in r.iter_mut().enumerate() {
+        let bearing = (BEAMS.angle_min + i as f64 * BEAMS.increment).to_degrees();
+        if bearing > -70.5 && bearing < -49.5 {
+            *range = f32::INFINITY;
+        }
+    }
+    r
+}
+
+#[test]
+fn two_pieces_of_one_wall_are_fused_as_one_line_fitted_to_both() {
+    let ranges = door_ranges();
+    let (report, merged) = update(map_of(&corridor()), &ranges, false);
+    // Four lines, one wall for two of them: one is matched, the other rejected for it,
+    // then fitted with it.
+    assert_eq!(
+        (report.extracted, report.matched, report.rejected),
+        (4, 3, 1)
+    );
+    assert_eq!((report.fused, report.merged), (3, 1));
+    // Fusing the lines given without their scan cannot merge: the piece alone is fused.
+    let mut config = LocalizerConfig::default();
+    config.matching.refit_missed_walls = false;
+    let p = Matrix3::from_diagonal(&Vector3::new(0.01, 0.01, 2.0_f64.to_radians().powi(2)));
+    let mut alone =
+        Localizer::new(config, Pose2::new(0.0, 0.03, 0.0), p, map_of(&corridor())).unwrap();
+    let lines = merged.last_lines().to_vec();
+    let report = alone.update_lines(&lines).unwrap();
+    assert_eq!((report.fused, report.merged), (3, 0));
+    // The longer baseline pins the heading better than the one piece does.
+    let (var_merged, var_alone) = (merged.covariance()[(2, 2)], alone.covariance()[(2, 2)]);
+    assert!(var_merged < var_alone, "{var_merged} vs {var_alone}");
+    assert!(merged.pose().y.abs() < 3.0 * merged.covariance()[(1, 1)].sqrt());
+}
+
+#[test]
+fn pieces_that_are_not_one_straight_wall_are_not_merged() {
+    // Past the door the wall is 0.1 m farther out (y = −2.1): both pieces still gate
+    // with the map's wall at y = −2, but their points are not one line.
+    let mut offset = corridor();
+    offset[2] = (Point2::new(-2.0, -2.1), Point2::new(3.0, -2.1));
+    let farther = ray_cast(&offset, &Pose2::identity(), &BEAMS, 0.0, None);
+    let mut ranges = door_ranges();
+    for (i, r) in ranges.iter_mut().enumerate() {
+        let bearing = (BEAMS.angle_min + i as f64 * BEAMS.increment).to_degrees();
+        if (-49.5..-33.0).contains(&bearing) {
+            *r = farther[i];
+        }
+    }
+    let (report, _) = update(map_of(&corridor()), &ranges, false);
+    assert_eq!((report.extracted, report.rejected), (4, 1));
+    assert_eq!(report.merged, 0);
 }

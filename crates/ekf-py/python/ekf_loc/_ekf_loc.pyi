@@ -421,7 +421,7 @@ class Localizer:
         range_min: float = 0.0,
         range_max: float = ...,
     ) -> dict[str, Union[int, bool]]:
-        """Counts: extracted, matched, rejected, fused, refused, refitted, map_built."""
+        """Counts: extracted, matched, rejected, fused, refused, merged, refitted, map_built."""
     @property
     def state(self) -> _F64Array: ...
     @property

@@ -850,6 +850,7 @@ fn write_scan_outputs(
         ("lines_rejected", report.rejected.to_string()),
         ("lines_fused", report.fused.to_string()),
         ("lines_refused", report.refused.to_string()),
+        ("lines_merged", report.merged.to_string()),
         ("walls_refitted", report.refitted.to_string()),
         ("nis", nis.join(" ")),
         ("rejections", rejections.join("; ")),

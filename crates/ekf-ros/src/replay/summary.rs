@@ -255,8 +255,8 @@ impl fmt::Display for ReplaySummary {
         )?;
         writeln!(
             f,
-            "  lines: extracted {}, matched {}, rejected {}, fused {}, refused {}; walls refitted from points {}",
-            l.extracted, l.matched, l.rejected, l.fused, l.refused, l.refitted
+            "  lines: extracted {}, matched {}, rejected {} ({} of them fused with another line of their wall), fused {}, refused {}; walls refitted from points {}",
+            l.extracted, l.matched, l.rejected, l.merged, l.fused, l.refused, l.refitted
         )?;
         let c = &self.compass;
         writeln!(
@@ -380,7 +380,7 @@ mod tests {
         s.lines.scans_used = 300;
         let quiet = "run.mcap (laser, map: first scan, 5 segments)\n  \
             motion steps 600, poses written 601, scans 301 (used 300)\n  \
-            lines: extracted 0, matched 0, rejected 0, fused 0, refused 0; walls refitted from points 0\n  \
+            lines: extracted 0, matched 0, rejected 0 (0 of them fused with another line of their wall), fused 0, refused 0; walls refitted from points 0\n  \
             compass: fused 0 (0 to end a gate lock-out), rejected 0\n  \
             per scan (median/p99 µs): extraction 0.0/0.0, matching 0.0/0.0, update 0.0/0.0\n  \
             wall time 0.12 s\n";

@@ -2,8 +2,8 @@
 //! scan to scan.
 
 use super::breakpoint::Breakpoint;
-use super::fit::{fit_line, fit_trimmed, PointNoise};
-use super::merge::{merge_collinear, Candidate, MergeRule};
+use super::fit::{fit_line, fit_trimmed, LineFit, PointNoise};
+use super::merge::{mahalanobis_squared, merge_collinear, Candidate, MergeRule};
 use super::points::{collect, BeamTable, Points, Run, ScanPoints};
 use super::split::split_runs;
 use super::{ExtractionError, ExtractionParams};
@@ -25,6 +25,8 @@ pub struct LineExtractor {
     stack: Vec<Run>,
     segments: Vec<Run>,
     candidates: Vec<Candidate>,
+    /// Per line of the last scan, its range of `segments`.
+    supports: Vec<Range<usize>>,
 }
 
 impl LineExtractor {
@@ -52,6 +54,7 @@ impl LineExtractor {
             stack: Vec::new(),
             segments: Vec::new(),
             candidates: Vec::new(),
+            supports: Vec::new(),
         })
     }
 
@@ -80,6 +83,7 @@ impl LineExtractor {
         out: &mut Vec<ObservedLine>,
     ) -> Result<(), ExtractionError> {
         out.clear();
+        self.supports.clear();
         scan.validate()?;
         self.beams.update(scan);
         let breakpoint = Breakpoint::new(
@@ -117,6 +121,7 @@ impl LineExtractor {
             if let Some(line) = observed_line(&points, &self.segments, c) {
                 if line.length() >= self.params.min_length {
                     out.push(line);
+                    self.supports.push(c.support.clone());
                 }
             }
         }
@@ -153,6 +158,23 @@ impl LineExtractor {
                 fit,
             },
         )
+    }
+
+    /// Whether two observed lines are one line by the test extraction merges neighbours
+    /// with: `(Δr, Δψ)ᵀ(Σ_a + Σ_b)⁻¹(Δr, Δψ) ≤ χ²₂⁻¹(merge_probability)`.
+    pub(crate) fn collinear(&self, a: &ObservedLine, b: &ObservedLine) -> bool {
+        let fit = |l: &ObservedLine| LineFit {
+            r: l.line.rho,
+            psi: l.line.beta,
+            covariance: l.covariance,
+        };
+        mahalanobis_squared(&fit(a), &fit(b)).is_some_and(|d2| d2 <= self.merge_rule.gate)
+    }
+
+    /// The beams of the `line`-th line of the last extracted scan: ranges of beam indices
+    /// in scan order, what [`fit_beams`](Self::fit_beams) takes.
+    pub(crate) fn beams_of(&self, line: usize) -> Option<&[Range<usize>]> {
+        self.segments.get(self.supports.get(line)?.clone())
     }
 
     /// The last extracted scan's beams as unit directions in the sensor frame,

@@ -21,7 +21,9 @@ use missed_walls::{MissedWalls, Tracing};
 use crate::relocalize::{
     fit_poses, relocalize, Hypothesis, PoseFits, Relocalization, RelocalizeParams, SearchWindow,
 };
-use crate::{LaserScan, LineExtractor, LineMap, MatchResult, Matcher, ObservedLine, WallErrors};
+use crate::{
+    LaserScan, LineExtractor, LineMap, MatchResult, Matcher, ObservedLine, RejectReason, WallErrors,
+};
 use alloc::vec::Vec;
 use core::ops::Range;
 use ekf_core::{
@@ -90,6 +92,9 @@ pub struct ScanReport {
     /// Walls no fused line lay on, fitted from the scan points on them and fused (see
     /// `missed_walls.rs`).
     pub refitted: usize,
+    /// Observed lines that were pieces of a wall another line was matched to, fitted
+    /// together with it and fused as one line.
+    pub merged: usize,
     /// `true` if this scan's lines became the map (see [`Localizer::with_first_scan_map`]);
     /// nothing is fused then.
     pub map_built: bool,
@@ -131,7 +136,12 @@ impl StageClock for () {
 /// 3. fuse the matches one at a time in increasing order of their NIS at `x⁻`: each is
 ///    re-linearised at the current state (after the lines fused before it), gated again
 ///    with the same threshold, and fused with a Joseph-form update if it passes;
-///    otherwise it is counted as refused and the state is left as it was;
+///    otherwise it is counted as refused and the state is left as it was. A line whose
+///    wall is also the best wall of lines rejected for it (`MapLineTaken`: pieces of one
+///    wall that extraction kept apart, at a door or behind clutter) is first fitted
+///    together with them, as extraction fits a line, and that line is fused instead if
+///    its points are straight and it passes the gate ([`ScanReport::merged`]): one
+///    measurement, so the wall's map noise is counted once;
 /// 4. if at least [`REFIT_AFTER_LINES`] lines were fused (and
 ///    [`MatchParams::refit_missed_walls`](crate::MatchParams::refit_missed_walls) is on):
 ///    trace the beams not on a fused line to the first wall they meet at the updated
@@ -211,6 +221,8 @@ pub struct Localizer {
     /// `χ²₁` at the matching's gate probability: whether a scan point lies on a wall.
     point_gate: f64,
     missed_walls: MissedWalls,
+    /// Scratch: the beams of the pieces of a wall merged in step 3.
+    merge_beams: Vec<Range<usize>>,
     fused_lines: Vec<ObservedLine>,
 }
 
@@ -260,6 +272,7 @@ impl Localizer {
             fusions: Vec::new(),
             point_gate,
             missed_walls: MissedWalls::default(),
+            merge_beams: Vec::new(),
             fused_lines: Vec::new(),
         })
     }
@@ -639,7 +652,7 @@ impl Localizer {
         report.matched = self.matches.matches().len();
         report.rejected = self.matches.rejections().len();
         let fused = self.atomically(|localizer| {
-            localizer.fuse_matches(&mut report)?;
+            localizer.fuse_matches(&mut report, scan.is_some())?;
             match scan {
                 Some(scan) if localizer.refits(&report) => {
                     localizer.fuse_missed_walls(scan, &mut report)
@@ -664,14 +677,37 @@ impl Localizer {
     /// current state (and a first-scan map's wall moved to its current placement) and
     /// re-gated; counts and records what happened to each. Then the rest of the map
     /// follows the placement.
-    fn fuse_matches(&mut self, report: &mut ScanReport) -> Result<(), ekf_core::Error> {
+    fn fuse_matches(
+        &mut self,
+        report: &mut ScanReport,
+        merge: bool,
+    ) -> Result<(), ekf_core::Error> {
         for i in 0..self.matches.matches().len() {
             let m = self.matches.matches()[i];
             let Some(line) = self.lines.get(m.observed).copied() else {
                 continue;
             };
-            let Some(outcome) = self.fuse_line(m.map, &line)? else {
-                continue;
+            let merged = if merge {
+                self.merged_pieces(m.observed, m.map)
+            } else {
+                None
+            };
+            let mut outcome = None;
+            if let Some((merged, pieces)) = merged {
+                match self.fuse_line(m.map, &merged)? {
+                    Some(o) if o.accepted => {
+                        report.merged += pieces;
+                        outcome = Some(o);
+                    }
+                    _ => {}
+                }
+            }
+            let outcome = match outcome {
+                Some(o) => o,
+                None => match self.fuse_line(m.map, &line)? {
+                    Some(o) => o,
+                    None => continue,
+                },
             };
             if outcome.accepted {
                 report.fused += 1;
@@ -687,6 +723,40 @@ impl Localizer {
         }
         self.map_errors.move_walls(&mut self.map);
         Ok(())
+    }
+
+    /// The line fitted to the beams of observed line `observed` and of the lines whose
+    /// best wall, `wall`, went to it (pieces of one wall that extraction kept apart, at a
+    /// door or clutter) and are one line with it by extraction's merge test, with how
+    /// many lines it joins; `None` if there are none, or their points are not one
+    /// straight line (see [`LineExtractor::fit_beams`]).
+    fn merged_pieces(&mut self, observed: usize, wall: usize) -> Option<(ObservedLine, usize)> {
+        let mut beams = core::mem::take(&mut self.merge_beams);
+        beams.clear();
+        let mut joined = 0;
+        for r in self.matches.rejections() {
+            if let RejectReason::MapLineTaken { map, by } = r.reason {
+                let (Some(a), Some(b)) = (self.lines.get(observed), self.lines.get(r.observed))
+                else {
+                    continue;
+                };
+                if map == wall && by == observed && self.extractor.collinear(a, b) {
+                    if let Some(pieces) = self.extractor.beams_of(r.observed) {
+                        beams.extend_from_slice(pieces);
+                        joined += 1;
+                    }
+                }
+            }
+        }
+        let merged = (joined > 0)
+            .then(|| {
+                beams.extend_from_slice(self.extractor.beams_of(observed)?);
+                beams.sort_unstable_by_key(|b| b.start);
+                self.extractor.fit_beams(&beams)
+            })
+            .flatten();
+        self.merge_beams = beams;
+        merged.map(|line| (line, joined))
     }
 
     /// Whether step 4 runs after the lines of `report` were fused: when configured, and
