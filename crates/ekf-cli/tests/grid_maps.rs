@@ -73,7 +73,7 @@ fn the_aces_map_drawn_as_a_grid_and_read_back_localizes_within_2_cm_of_it() {
     );
 }
 
-/// The maps issue asks for 0.03 m here; this grid gives 0.121 m against 0.076 m (other
+/// The maps issue asks for 0.03 m here; this grid gives 0.121 m against 0.075 m (other
 /// lattice spacings give 0.094–0.139 m with the same share of walls matched, so the gap is
 /// the tracking's sensitivity to small map differences, not a worse map). The bound
 /// guards what holds today: tracked throughout, within 0.07 m.

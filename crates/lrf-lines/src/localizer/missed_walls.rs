@@ -15,7 +15,8 @@
 //! A beam with the unit direction `u` (world frame) from the sensor at `s` meets the wall
 //! from `a` to `b` (`e = b − a`) at `t = (a − s) × e / (u × e)`, inside it when
 //! `k = (a − s) × u / (u × e)` lies in `[0, 1]`; the first wall it meets is the one of
-//! smallest `t > 0`. Only walls within the scan's longest reading of the sensor, and only
+//! smallest `t > 0`. Only walls within the longest reading of the beams left (fewer than
+//! [`MIN_RUN`] beams left: none), and only
 //! the beams whose bearings lie between those of a wall's end points (and the one beside
 //! each), are tried. The reading `r` gives the point `p = s + r u` at the normal distance
 //! `d = (n·u)(r − t)` from the wall, `n` its unit normal, with the Jacobian
@@ -80,12 +81,22 @@ impl MissedWalls {
         self.hits.clear();
         self.hits.resize(n, None);
         self.mark_skipped(scan, n, fused);
-        let sensor = at.pose.compose(&at.mount);
-        let far = scan
+        self.pieces.clear();
+        self.runs.clear();
+        self.groups.clear();
+        // The beams left to trace, and the longest of their readings.
+        let (left, far) = scan
             .ranges
             .iter()
-            .filter(|&&r| scan.is_valid(r))
-            .fold(0.0_f64, |m, &r| m.max(f64::from(r)));
+            .zip(&self.skip)
+            .filter(|(_, &skip)| !skip)
+            .fold((0_usize, 0.0_f64), |(k, m), (&r, _)| {
+                (k + 1, m.max(f64::from(r)))
+            });
+        if left < MIN_RUN {
+            return;
+        }
+        let sensor = at.pose.compose(&at.mount);
         let (st, ct) = libm::sincos(sensor.theta);
         for (w, wall) in map.segments.iter().enumerate() {
             // The sensor farther than `far` from the wall's bounding box: out of reach.
