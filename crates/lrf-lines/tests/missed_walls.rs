@@ -213,3 +213,37 @@ fn pieces_that_are_not_one_straight_wall_are_not_merged() {
     assert_eq!((report.extracted, report.rejected), (4, 1));
     assert_eq!(report.merged, 0);
 }
+
+#[test]
+fn a_wall_of_a_first_scan_map_seen_only_in_pieces_is_refitted_with_its_error() {
+    // The first scan sees all three walls whole and becomes the map; the second, from
+    // the same place, sees the wall at y = −2 only in short pieces.
+    let p0 = Matrix3::from_diagonal(&Vector3::new(1e-4, 1e-4, 0.5_f64.to_radians().powi(2)));
+    let mut localizer =
+        Localizer::with_first_scan_map(LocalizerConfig::default(), Pose2::identity(), p0).unwrap();
+    let whole = ray_cast(&corridor(), &Pose2::identity(), &BEAMS, 0.0, None);
+    let first = localizer.update_scan(&scan(&whole)).unwrap();
+    assert!(first.map_built);
+    assert_eq!(localizer.map().len(), 3);
+    let before = *localizer.covariance();
+    let report = localizer.update_scan(&scan(&ranges(4))).unwrap();
+    assert_eq!((report.extracted, report.fused, report.refitted), (2, 2, 1));
+    // The map's walls stay where the first scan put them (to within a millimetre: the
+    // second scan agrees with it), and the state is still consistent.
+    let off_line = |p: &Point2<f64>, (a, b): &Wall| {
+        let (e, d) = (b - a, p - a);
+        (e.x * d.y - e.y * d.x).abs() / e.norm()
+    };
+    for wall in &localizer.map().segments {
+        assert!(
+            corridor()
+                .iter()
+                .any(|w| off_line(&wall.start, w) < 1e-3 && off_line(&wall.end, w) < 1e-3),
+            "{wall:?}"
+        );
+    }
+    let p = localizer.covariance();
+    assert!((p - p.transpose()).abs().max() <= 1e-12 && p.cholesky().is_some());
+    assert!(p[(1, 1)] <= before[(1, 1)], "{p} vs {before}");
+    assert!(localizer.pose().y.abs() < 3.0 * p[(1, 1)].sqrt() + 1e-3);
+}

@@ -614,7 +614,9 @@ impl Localizer {
 
     /// The laser step for lines already extracted (sensor frame, as
     /// [`last_lines`](Self::last_lines) gives them): match at the current state and fuse,
-    /// as [`update_scan`](Self::update_scan) does after its extraction. A loop-closure
+    /// as [`update_scan`](Self::update_scan) does after its extraction, but without the
+    /// scan's points: no pieces of a wall are fitted together and no missed wall is
+    /// fitted from points (`merged` and `refitted` stay 0). A loop-closure
     /// check refines a pose this way against a part of a map. Fails, leaving the filter as
     /// it was, on a line that is not finite or whose covariance is not positive definite.
     pub fn update_lines(&mut self, lines: &[ObservedLine]) -> Result<ScanReport, LocalizerError> {
