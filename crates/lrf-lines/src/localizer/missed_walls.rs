@@ -315,10 +315,11 @@ fn beams_between(
         .chain(before_first)
 }
 
-/// Whether the first `n` beams of `scan` go all round, the last beside the first.
+/// Whether the first `n` beams of `scan` go once all round, the last beside the first
+/// (to within half a beam).
 fn full_turn(scan: &LaserScan<'_>, n: usize) -> bool {
     let step = libm::fabs(scan.angle_increment);
-    n as f64 * step >= core::f64::consts::TAU - 0.5 * step
+    libm::fabs(n as f64 * step - core::f64::consts::TAU) <= 0.5 * step
 }
 
 /// `angle` moved by whole turns into `[lo, lo + 2π)`: by a loop of additions for an angle

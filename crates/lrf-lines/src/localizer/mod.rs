@@ -46,6 +46,10 @@ pub struct LineFusion {
     pub nis: f64,
     /// `true` if it passed the gate again and was fused.
     pub accepted: bool,
+    /// Other observed lines fused with it as one line (pieces of the same wall rejected
+    /// for it, [`RejectReason::MapLineTaken`], fitted together with it); `nis` is then
+    /// that of the joint line.
+    pub merged: usize,
 }
 
 /// What [`Localizer::update_compass`] did with a heading.
@@ -139,8 +143,9 @@ impl StageClock for () {
 ///    otherwise it is counted as refused and the state is left as it was. A line whose
 ///    wall is also the best wall of lines rejected for it (`MapLineTaken`: pieces of one
 ///    wall that extraction kept apart, at a door or behind clutter) is first fitted
-///    together with them, as extraction fits a line, and that line is fused instead if
-///    its points are straight and it passes the gate ([`ScanReport::merged`]): one
+///    together with those that are one line with it by extraction's merge test, as
+///    extraction fits a line, and that line is fused instead if its points are straight
+///    and it passes the gate ([`ScanReport::merged`]): one
 ///    measurement, so the wall's map noise is counted once;
 /// 4. if at least [`REFIT_AFTER_LINES`] lines were fused (and
 ///    [`MatchParams::refit_missed_walls`](crate::MatchParams::refit_missed_walls) is on):
@@ -223,6 +228,10 @@ pub struct Localizer {
     missed_walls: MissedWalls,
     /// Scratch: the beams of the pieces of a wall merged in step 3.
     merge_beams: Vec<Range<usize>>,
+    /// Scratch: the observed lines a merge in step 3 joins, and those of this scan's
+    /// accepted merges (their beams are not traced again in step 4).
+    joined: Vec<usize>,
+    merged_lines: Vec<usize>,
     fused_lines: Vec<ObservedLine>,
 }
 
@@ -273,6 +282,8 @@ impl Localizer {
             point_gate,
             missed_walls: MissedWalls::default(),
             merge_beams: Vec::new(),
+            joined: Vec::new(),
+            merged_lines: Vec::new(),
             fused_lines: Vec::new(),
         })
     }
@@ -684,6 +695,7 @@ impl Localizer {
         report: &mut ScanReport,
         merge: bool,
     ) -> Result<(), ekf_core::Error> {
+        self.merged_lines.clear();
         for i in 0..self.matches.matches().len() {
             let m = self.matches.matches()[i];
             let Some(line) = self.lines.get(m.observed).copied() else {
@@ -694,14 +706,18 @@ impl Localizer {
             } else {
                 None
             };
+            // The joint line if it passes the gate; else (refused, or its update failed,
+            // leaving the state as it was) the line alone.
             let mut outcome = None;
-            if let Some((merged, pieces)) = merged {
-                match self.fuse_line(m.map, &merged)? {
-                    Some(o) if o.accepted => {
+            let mut pieces = 0;
+            if let Some(merged) = merged {
+                if let Ok(Some(o)) = self.fuse_line(m.map, &merged) {
+                    if o.accepted {
+                        pieces = self.joined.len();
                         report.merged += pieces;
+                        self.merged_lines.extend_from_slice(&self.joined);
                         outcome = Some(o);
                     }
-                    _ => {}
                 }
             }
             let outcome = match outcome {
@@ -721,6 +737,7 @@ impl Localizer {
                 map: m.map,
                 nis: outcome.nis,
                 accepted: outcome.accepted,
+                merged: pieces,
             });
         }
         self.map_errors.move_walls(&mut self.map);
@@ -730,12 +747,12 @@ impl Localizer {
     /// The line fitted to the beams of observed line `observed` and of the lines whose
     /// best wall, `wall`, went to it (pieces of one wall that extraction kept apart, at a
     /// door or clutter) and are one line with it by extraction's merge test, with how
-    /// many lines it joins; `None` if there are none, or their points are not one
+    /// lines it joins in `joined`; `None` if there are none, or their points are not one
     /// straight line (see [`LineExtractor::fit_beams`]).
-    fn merged_pieces(&mut self, observed: usize, wall: usize) -> Option<(ObservedLine, usize)> {
+    fn merged_pieces(&mut self, observed: usize, wall: usize) -> Option<ObservedLine> {
         let mut beams = core::mem::take(&mut self.merge_beams);
         beams.clear();
-        let mut joined = 0;
+        self.joined.clear();
         for r in self.matches.rejections() {
             if let RejectReason::MapLineTaken { map, by } = r.reason {
                 let (Some(a), Some(b)) = (self.lines.get(observed), self.lines.get(r.observed))
@@ -745,12 +762,12 @@ impl Localizer {
                 if map == wall && by == observed && self.extractor.collinear(a, b) {
                     if let Some(pieces) = self.extractor.beams_of(r.observed) {
                         beams.extend_from_slice(pieces);
-                        joined += 1;
+                        self.joined.push(r.observed);
                     }
                 }
             }
         }
-        let merged = (joined > 0)
+        let merged = (!self.joined.is_empty())
             .then(|| {
                 beams.extend_from_slice(self.extractor.beams_of(observed)?);
                 beams.sort_unstable_by_key(|b| b.start);
@@ -758,7 +775,7 @@ impl Localizer {
             })
             .flatten();
         self.merge_beams = beams;
-        merged.map(|line| (line, joined))
+        merged
     }
 
     /// Whether step 4 runs after the lines of `report` were fused: when configured, and
@@ -784,6 +801,11 @@ impl Localizer {
                 .iter()
                 .filter(|f| f.accepted)
                 .filter_map(|f| self.lines.get(f.observed).copied()),
+        );
+        fused_lines.extend(
+            self.merged_lines
+                .iter()
+                .filter_map(|&i| self.lines.get(i).copied()),
         );
         let extraction = self.extractor.params();
         let (min_points, min_length) = (extraction.min_points, extraction.min_length);
