@@ -228,9 +228,8 @@ pub struct Localizer {
     missed_walls: MissedWalls,
     /// Scratch: the beams of the pieces of a wall merged in step 3.
     merge_beams: Vec<Range<usize>>,
-    /// Scratch: the observed lines a merge in step 3 joins, and those of this scan's
-    /// accepted merges (their beams are not traced again in step 4).
-    joined: Vec<usize>,
+    /// The observed lines this scan's merges in step 3 joined to a matched line (their
+    /// beams are not traced again in step 4).
     merged_lines: Vec<usize>,
     fused_lines: Vec<ObservedLine>,
 }
@@ -282,7 +281,6 @@ impl Localizer {
             point_gate,
             missed_walls: MissedWalls::default(),
             merge_beams: Vec::new(),
-            joined: Vec::new(),
             merged_lines: Vec::new(),
             fused_lines: Vec::new(),
         })
@@ -701,25 +699,26 @@ impl Localizer {
             let Some(line) = self.lines.get(m.observed).copied() else {
                 continue;
             };
+            let before = self.merged_lines.len();
             let merged = if merge {
                 self.merged_pieces(m.observed, m.map)
             } else {
                 None
             };
             // The joint line if it passes the gate; else (refused, or its update failed,
-            // leaving the state as it was) the line alone.
+            // leaving the state as it was) the line alone, and the lines it would have
+            // joined are not merged.
             let mut outcome = None;
-            let mut pieces = 0;
             if let Some(merged) = merged {
                 if let Ok(Some(o)) = self.fuse_line(m.map, &merged) {
-                    if o.accepted {
-                        pieces = self.joined.len();
-                        report.merged += pieces;
-                        self.merged_lines.extend_from_slice(&self.joined);
-                        outcome = Some(o);
-                    }
+                    outcome = o.accepted.then_some(o);
                 }
             }
+            if outcome.is_none() {
+                self.merged_lines.truncate(before);
+            }
+            let pieces = self.merged_lines.len() - before;
+            report.merged += pieces;
             let outcome = match outcome {
                 Some(o) => o,
                 None => match self.fuse_line(m.map, &line)? {
@@ -746,28 +745,29 @@ impl Localizer {
 
     /// The line fitted to the beams of observed line `observed` and of the lines whose
     /// best wall, `wall`, went to it (pieces of one wall that extraction kept apart, at a
-    /// door or clutter) and are one line with it by extraction's merge test, with how
-    /// lines it joins in `joined`; `None` if there are none, or their points are not one
-    /// straight line (see [`LineExtractor::fit_beams`]).
+    /// door or clutter) and are one line with it by extraction's merge test; the lines it
+    /// joins are appended to `merged_lines`. `None` if there are none, or their points are
+    /// not one straight line (see [`LineExtractor::fit_beams`]).
     fn merged_pieces(&mut self, observed: usize, wall: usize) -> Option<ObservedLine> {
+        let line = self.lines.get(observed)?;
         let mut beams = core::mem::take(&mut self.merge_beams);
         beams.clear();
-        self.joined.clear();
+        let before = self.merged_lines.len();
         for r in self.matches.rejections() {
-            if let RejectReason::MapLineTaken { map, by } = r.reason {
-                let (Some(a), Some(b)) = (self.lines.get(observed), self.lines.get(r.observed))
-                else {
-                    continue;
-                };
-                if map == wall && by == observed && self.extractor.collinear(a, b) {
-                    if let Some(pieces) = self.extractor.beams_of(r.observed) {
-                        beams.extend_from_slice(pieces);
-                        self.joined.push(r.observed);
-                    }
+            let RejectReason::MapLineTaken { map, by } = r.reason else {
+                continue;
+            };
+            let Some(piece) = self.lines.get(r.observed) else {
+                continue;
+            };
+            if map == wall && by == observed && self.extractor.collinear(line, piece) {
+                if let Some(pieces) = self.extractor.beams_of(r.observed) {
+                    beams.extend_from_slice(pieces);
+                    self.merged_lines.push(r.observed);
                 }
             }
         }
-        let merged = (!self.joined.is_empty())
+        let merged = (self.merged_lines.len() > before)
             .then(|| {
                 beams.extend_from_slice(self.extractor.beams_of(observed)?);
                 beams.sort_unstable_by_key(|b| b.start);
