@@ -374,3 +374,39 @@ proptest! {
         }
     }
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(100))]
+
+    /// A result reused from a scan against another map (whose walls share some `β` with
+    /// this one's, some not, and may be fewer or more) matches exactly as a fresh one:
+    /// nothing of the last scan's walls leaks into this scan's decisions.
+    #[test]
+    fn a_reused_result_matches_as_a_fresh_one(
+        observed in proptest::collection::vec(observed_line(), 0..12),
+        segments in proptest::collection::vec(segment(), 1..12),
+        before in proptest::collection::vec(segment(), 0..12),
+        shared in 0usize..12,
+        (x, y, theta) in (-5.0..5.0, -5.0..5.0, -PI..PI),
+    ) {
+        let ekf = Ekf::new(Pose2::new(x, y, theta), Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, 0.3))).unwrap();
+        // The earlier map: its own walls, its first `shared` ones moved off this map's
+        // walls along their line (same β, other extent).
+        let earlier: Vec<MapSegment> = before.iter().enumerate().map(|(j, s)| match segments.get(j) {
+            Some(w) if j < shared => {
+                let shift = w.end - w.start;
+                MapSegment::from_points(w.start + shift, w.end + shift * 2.0).unwrap()
+            }
+            _ => *s,
+        }).collect();
+        let matcher = matcher();
+        let mut reused = MatchResult::new();
+        matcher.match_lines(&observed, &LineMap::new(earlier), &ekf, &mount(), &mut reused);
+        let map = LineMap::new(segments);
+        matcher.match_lines(&observed, &map, &ekf, &mount(), &mut reused);
+        let mut fresh = MatchResult::new();
+        matcher.match_lines(&observed, &map, &ekf, &mount(), &mut fresh);
+        prop_assert_eq!(format!("{:?}", reused.matches()), format!("{:?}", fresh.matches()));
+        prop_assert_eq!(format!("{:?}", reused.rejections()), format!("{:?}", fresh.rejections()));
+    }
+}

@@ -196,10 +196,12 @@ enum Status {
     Matched,
 }
 
-/// Per-wall values computed once per scan: `cos β`, `sin β` and the wall's extent along
-/// its direction.
+/// Per-wall values of one scan: `cos β`, `sin β`, the wall's extent along its direction
+/// and its considered error.
 #[derive(Debug, Clone, Copy)]
 struct WallCache {
+    /// The `β` that `cos` and `sin` were computed from.
+    beta: f64,
     cos: f64,
     sin: f64,
     extent: (f64, f64),
@@ -208,12 +210,24 @@ struct WallCache {
 }
 
 impl WallCache {
-    fn new(segment: &MapSegment, considered: Option<Considered<f64, 2, 2>>) -> Self {
-        let (sin, cos) = (libm::sin(segment.line.beta), libm::cos(segment.line.beta));
+    /// The values of `segment`, reusing the trigonometry of `previous` (the same wall's
+    /// values at the last scan) when the wall's `β` is bit for bit the same: a map that
+    /// does not change between scans costs no `sin`/`cos` after the first.
+    fn new(
+        segment: &MapSegment,
+        previous: Option<&WallCache>,
+        considered: Option<Considered<f64, 2, 2>>,
+    ) -> Self {
+        let beta = segment.line.beta;
+        let (sin, cos) = match previous {
+            Some(w) if w.beta.to_bits() == beta.to_bits() => (w.sin, w.cos),
+            _ => (libm::sin(beta), libm::cos(beta)),
+        };
         // Coordinates along the direction d = (−sin β, cos β).
         let along = |p: &Point2<f64>| -p.x * sin + p.y * cos;
         let (t0, t1) = (along(&segment.start), along(&segment.end));
         Self {
+            beta,
             cos,
             sin,
             extent: (t0.min(t1), t0.max(t1)),
@@ -349,7 +363,6 @@ impl MatchResult {
             .resize(num_observed, Status::Unmatched(RejectReason::OutsideGate));
         self.owner.clear();
         self.owner.resize(num_walls, None);
-        self.walls.clear();
         self.lines.clear();
     }
 }
@@ -436,10 +449,16 @@ impl Matcher {
     ) {
         out.clear(observed.len(), map.segments.len());
         let pose = ekf.pose();
-        out.walls
-            .extend(map.segments.iter().enumerate().map(|(j, segment)| {
-                WallCache::new(segment, errors.considered(j, &segment.line, mount, &pose))
-            }));
+        // The last scan's wall values stay in `out.walls` for their trigonometry.
+        out.walls.truncate(map.segments.len());
+        for (j, segment) in map.segments.iter().enumerate() {
+            let considered = errors.considered(j, &segment.line, mount, &pose);
+            let wall = WallCache::new(segment, out.walls.get(j), considered);
+            match out.walls.get_mut(j) {
+                Some(w) => *w = wall,
+                None => out.walls.push(wall),
+            }
+        }
         for (i, line) in observed.iter().enumerate() {
             if let Err(e) = line.validate() {
                 out.status[i] = Status::Unmatched(RejectReason::InvalidLine(e));
