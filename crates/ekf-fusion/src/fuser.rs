@@ -7,9 +7,10 @@ use crate::consistency::ConsistencyMonitor;
 use crate::counts::FusionCounts;
 use crate::motion::{MotionClock, MotionStep};
 use crate::tracking::{self, Tracking};
-use crate::verification::{Verification, Verified};
+use crate::verification::{self, Verification, Verified};
 use crate::wheels::{Contradiction, OdometryTracker, WheelTracker};
 use crate::{FusionError, Input, Scan, Skip};
+use alloc::vec::Vec;
 use ekf_core::{ChiSquareGate, Pose2, UpdateOutcome};
 use lrf_lines::{
     CompassUpdate, ExtractionError, LineMap, Localizer, LocalizerError, RelocalizeParams,
@@ -307,13 +308,14 @@ impl Fuser {
 
     /// Predicts the filter through one motion step.
     fn predict(&mut self, step: MotionStep) -> Result<(), FusionError> {
-        let before = self.localizer.pose();
         match step {
             MotionStep::Wheels(s) => self.localizer.predict_wheels(&s)?,
             MotionStep::Odometry(m) => self.localizer.predict_odometry(&m)?,
         }
         if let Some(pending) = self.tracking.verification.as_mut() {
-            pending.moved(&before.inverse().compose(&self.localizer.pose()));
+            pending
+                .predict(step, self.localizer.config())
+                .map_err(LocalizerError::Filter)?;
         }
         Ok(())
     }
@@ -461,7 +463,7 @@ impl Fuser {
             } else if !uncertain {
                 return Ok(());
             }
-        } else if !gap && !self.tracking.unlocked && report.fused >= tracking::MIN_VERIFIED_LINES {
+        } else if !gap && !self.tracking.unlocked && self.fused_lines_fix_position(&params) {
             // Regained by tracking alone.
             self.tracking.lost_for = 0;
             self.tracking.verification = None;
@@ -477,7 +479,9 @@ impl Fuser {
         }
         let verify = !gap && (lost_now || self.tracking.lost_for > 0);
         if let Some(mut pending) = self.tracking.verification.take() {
-            pending.add_scan(&self.localizer.fit_poses(&pending.poses(), &params));
+            pending
+                .add_scan(&self.localizer, &params)
+                .map_err(LocalizerError::Filter)?;
             if !pending.done() {
                 self.tracking.verification = Some(pending);
                 self.tracking.lost_for += 1;
@@ -499,7 +503,11 @@ impl Fuser {
         let found = self.localizer.relocalize(&window, &params);
         if verify {
             match found.filter(|f| f.explains_scan(&params)) {
-                Some(found) => self.tracking.verification = Some(Verification::start(&found)),
+                Some(found) => {
+                    let candidates =
+                        Verification::start(&found, &params).map_err(LocalizerError::Filter)?;
+                    self.tracking.verification = Some(candidates);
+                }
                 None => self.counts.tracking.refused += 1,
             }
             self.tracking.lost_for += 1;
@@ -512,6 +520,7 @@ impl Fuser {
         };
         let won = Verified {
             pose: found.best.pose,
+            covariance: verification::restart_covariance(&params),
             inliers: found.best.inliers,
             score: found.best.score,
             runner_up: found.runner_up,
@@ -537,8 +546,7 @@ impl Fuser {
             return Ok(());
         }
         let saved = self.localizer.clone();
-        self.localizer
-            .reset(best, tracking::restart_covariance(params))?;
+        self.localizer.reset(best, won.covariance)?;
         let verified = match self.localizer.update_scan(&scan.as_scan()) {
             Ok(r) if r.fused >= tracking::MIN_VERIFIED_LINES => Some(r),
             _ => None,
@@ -563,6 +571,19 @@ impl Fuser {
         Ok(())
     }
 
+    /// Whether the last scan's fused lines fix the position ([`tracking::fix_position`]).
+    fn fused_lines_fix_position(&self, params: &RelocalizeParams) -> bool {
+        let lines = self.localizer.last_lines();
+        let normals: Vec<f64> = self
+            .localizer
+            .last_fusions()
+            .iter()
+            .filter(|f| f.accepted)
+            .filter_map(|f| lines.get(f.observed).map(|l| l.line.beta))
+            .collect();
+        tracking::fix_position(&normals, params)
+    }
+
     /// The fused state predicted through `motion` (motion readings in stamp order, each
     /// after the last one fused), as fusing them would predict it; the fuser is left as
     /// it is. Readings it would skip are skipped. `None` until a motion step has been
@@ -585,16 +606,10 @@ impl Fuser {
             else {
                 continue;
             };
-            let predicted = match clock.advance(step, t0, t1) {
-                Some(MotionStep::Wheels(s)) => ekf
-                    .predict_wheels(&config.robot, &s, &config.wheel_noise)
-                    .map(drop),
-                Some(MotionStep::Odometry(m)) => {
-                    ekf.predict_odometry(&m, &config.odometry_noise).map(drop)
-                }
-                None => Ok(()),
-            };
-            predicted.map_err(LocalizerError::Filter)?;
+            if let Some(part) = clock.advance(step, t0, t1) {
+                part.predict(&mut ekf, config)
+                    .map_err(LocalizerError::Filter)?;
+            }
             t_ns = t_ns.max(stamp);
         }
         Ok(Some(Forecast {

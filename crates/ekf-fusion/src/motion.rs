@@ -1,7 +1,8 @@
 //! Motion steps over time intervals, and the clock that says which part of a step the
 //! state has not yet been predicted through.
 
-use ekf_core::{Motion, WheelSpeeds};
+use ekf_core::{Ekf, Motion, WheelSpeeds};
+use lrf_lines::LocalizerConfig;
 
 /// Longest time after the end of the last motion step up to which the state is brought
 /// forward at that step's rate (ns).
@@ -32,6 +33,20 @@ impl MotionStep {
                 ds: m.ds * f,
                 dtheta: m.dtheta * f,
             }),
+        }
+    }
+
+    /// Predicts `ekf` through the step with the robot and noise of `config`.
+    pub fn predict(
+        self,
+        ekf: &mut Ekf<f64>,
+        config: &LocalizerConfig,
+    ) -> Result<(), ekf_core::Error> {
+        match self {
+            MotionStep::Wheels(s) => ekf
+                .predict_wheels(&config.robot, &s, &config.wheel_noise)
+                .map(drop),
+            MotionStep::Odometry(m) => ekf.predict_odometry(&m, &config.odometry_noise).map(drop),
         }
     }
 

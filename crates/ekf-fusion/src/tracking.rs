@@ -21,8 +21,10 @@
 //! worse than its noise model says (csail's is off by up to 17° on a 60° turn) is caught so
 //! before nearest-neighbour matching locks onto the wrong walls. A check whose search is
 //! refused (ambiguous, or not verified) leaves the filter treated as lost, without a loss
-//! counted, until a scan fuses at least [`MIN_VERIFIED_LINES`] lines again: meanwhile
-//! each scan searches a wider window.
+//! counted, until a scan fixes the position again (at least [`MIN_VERIFIED_LINES`]
+//! lines fused, two of them not parallel: walls on one side and the other of a corridor
+//! agree with any place along it): meanwhile each scan searches a wider window. A loss
+//! ends the same way when tracking alone regains the pose.
 //!
 //! # What is done then
 //!
@@ -32,15 +34,19 @@
 //! [`GLOBAL_AFTER_SCANS`] lost scans (and from the start with `--global`), the whole map.
 //!
 //! While lost with odometry since the scan before, the search only nominates: its best
-//! poses are carried by the odometry over the next scans and the one that explains those
-//! scans clearly better than the others wins ([`crate::verification`]). After a motion
+//! poses are tracked over the next scans (each predicted with the motion model and looked
+//! for within its own uncertainty) and the one that explains those scans clearly better
+//! than the others wins ([`crate::verification`]). After a motion
 //! gap there is no odometry to carry them, and a check of a tracked estimate starts from
 //! a pose the filter still trusts: there the search's own scan decides, its best pose
 //! taken only when it wins clearly over every pose elsewhere
 //! ([`lrf_lines::Relocalization::is_unambiguous`]).
 //!
-//! Either way, once the filter is restarted at the chosen pose, the scan's lines must
-//! fuse at least [`MIN_VERIFIED_LINES`] of them; otherwise the filter is put back as it
+//! Either way, once the filter is restarted at the chosen pose (with the verified
+//! candidate's own covariance, or the search's resolution for a single scan's answer),
+//! the scan's lines must fuse at least [`MIN_VERIFIED_LINES`] of them there (the search
+//! has already placed the robot; requiring two that are not parallel here delayed
+//! `--global`'s lock-on in edmonton's open hall from scan 4 to 21); otherwise the filter is put back as it
 //! was. A relocalization within [`RelocalizeParams::distinct_distance`] and
 //! [`RelocalizeParams::distinct_angle`] of the estimate changes nothing. Every loss, its
 //! end and every relocalization are reported with the scan ([`crate::ScanFused`]; `ekf
@@ -57,15 +63,23 @@ pub const LOST_AFTER_SCANS: u32 = 3;
 /// Scans lost after which the search covers the whole map.
 pub const GLOBAL_AFTER_SCANS: u32 = 10;
 
-/// Lines the scan must fuse at the relocalized pose for it to be kept.
+/// Lines a scan must fuse at a relocalized pose for it to be kept; while lost, tracking
+/// counts as regained only when this many fused lines also fix the position
+/// ([`fix_position`]).
 pub const MIN_VERIFIED_LINES: usize = 2;
 
-/// Covariance the filter restarts with at a relocalized pose, before the scan's lines
-/// are fused: the search's inlier distance (0.15 m) and angle tolerance (3°) as 1σ.
-pub fn restart_covariance(params: &RelocalizeParams) -> Matrix3<f64> {
-    let sxy = params.inlier_distance;
-    let sth = params.angle_tolerance;
-    Matrix3::from_diagonal(&nalgebra::Vector3::new(sxy * sxy, sxy * sxy, sth * sth))
+/// Whether lines with these normal directions (rad), fused together, fix the position:
+/// at least [`MIN_VERIFIED_LINES`] of them, two whose directions differ by at least
+/// `params.min_pair_angle` modulo π (parallel walls leave the position along them free,
+/// as the search's line pairs do).
+pub fn fix_position(normals: &[f64], params: &RelocalizeParams) -> bool {
+    normals.len() >= MIN_VERIFIED_LINES
+        && normals.iter().enumerate().any(|(i, a)| {
+            normals[i + 1..].iter().any(|b| {
+                let d = libm::fabs(ekf_core::wrap_angle(2.0 * (a - b))) / 2.0;
+                d >= params.min_pair_angle
+            })
+        })
 }
 
 /// Whether the filter's heading (covariance `p`) is less certain than the search
@@ -214,10 +228,10 @@ impl Tracking {
         if self.lost_for >= GLOBAL_AFTER_SCANS {
             return SearchWindow::global();
         }
-        SearchWindow {
+        SearchWindow::around(
             center,
-            radius: 3.0 * libm::sqrt(var_xy.max(0.0)) + 2.0 * f64::from(1 + self.lost_for),
-        }
+            3.0 * libm::sqrt(var_xy.max(0.0)) + 2.0 * f64::from(1 + self.lost_for),
+        )
     }
 }
 
@@ -263,6 +277,22 @@ mod tests {
         assert!(!t.scan_fused(4, 0));
         assert!(t.scan_fused(3, 0));
         assert!(!t.scan_fused(3, 1), "a fused line ends it");
+    }
+
+    #[test]
+    fn only_lines_that_are_not_parallel_fix_the_position() {
+        let params = RelocalizeParams::default();
+        let deg = |d: f64| d.to_radians();
+        assert!(!fix_position(&[], &params));
+        assert!(!fix_position(&[deg(10.0)], &params), "one line");
+        // The two walls of a corridor: normals opposite, the same direction.
+        assert!(!fix_position(&[deg(90.0), deg(-90.0)], &params));
+        assert!(!fix_position(&[deg(90.0), deg(-90.0), deg(119.0)], &params));
+        assert!(fix_position(&[deg(90.0), deg(-90.0), deg(121.0)], &params));
+        assert!(fix_position(&[deg(0.0), deg(90.0)], &params), "a corner");
+        // Across the ±π seam: 175° and −150° are 35° apart.
+        assert!(fix_position(&[deg(175.0), deg(-150.0)], &params));
+        assert!(!fix_position(&[deg(175.0), deg(-170.0)], &params));
     }
 
     #[test]

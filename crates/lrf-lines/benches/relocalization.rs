@@ -57,10 +57,7 @@ fn bench(c: &mut Criterion) {
     let lines = seen(&map, &robot, 8.0);
     let params = RelocalizeParams::default();
     let mount = Pose2::identity();
-    let local = SearchWindow {
-        center: Point2::new(robot.x + 1.0, robot.y - 0.5),
-        radius: 3.0,
-    };
+    let local = SearchWindow::around(Point2::new(robot.x + 1.0, robot.y - 0.5), 3.0);
     for (name, window) in [
         ("relocalize local 3 m, 500 walls", local),
         ("relocalize global, 500 walls", SearchWindow::global()),

@@ -86,22 +86,52 @@ impl Default for RelocalizeParams {
     }
 }
 
-/// Where the search may put the robot: within `radius` (m) of `center`, any heading.
+/// Where the search may put the robot: within `radius` (m) of `center`, and with a
+/// heading within `heading` if one is given.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SearchWindow {
     /// Centre of the search (world frame, m).
     pub center: Point2<f64>,
     /// Largest distance from the centre (m); `f64::INFINITY` for the whole map.
     pub radius: f64,
+    /// Headings the robot may have; `None` for any.
+    pub heading: Option<HeadingWindow>,
+}
+
+/// Headings within `tolerance` of `theta` (rad): `|wrap(θ − theta)| ≤ tolerance`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HeadingWindow {
+    /// The heading the window is centred on (rad).
+    pub theta: f64,
+    /// Largest difference from it (rad).
+    pub tolerance: f64,
 }
 
 impl SearchWindow {
-    /// The whole map.
+    /// The whole map, any heading.
     pub fn global() -> Self {
         Self {
             center: Point2::origin(),
             radius: f64::INFINITY,
+            heading: None,
         }
+    }
+
+    /// Within `radius` of `center`, any heading.
+    pub fn around(center: Point2<f64>, radius: f64) -> Self {
+        Self {
+            center,
+            radius,
+            heading: None,
+        }
+    }
+
+    /// Whether `pose` lies in the window.
+    pub fn contains(&self, pose: &Pose2<f64>) -> bool {
+        (Point2::new(pose.x, pose.y) - self.center).norm() <= self.radius
+            && self
+                .heading
+                .is_none_or(|h| angle_diff(pose.theta, h.theta).abs() <= h.tolerance)
     }
 }
 
@@ -229,10 +259,16 @@ pub fn relocalize(
                     }
                     for flip in [0.0, PI] {
                         let theta = wrap_angle(angle_a - oi.angle + flip);
+                        if window
+                            .heading
+                            .is_some_and(|h| angle_diff(theta, h.theta).abs() > h.tolerance)
+                        {
+                            continue;
+                        }
                         let Some(pose) = pose_from_pair(theta, oi, wa, oj, wb) else {
                             continue;
                         };
-                        if (Point2::new(pose.x, pose.y) - window.center).norm() > window.radius
+                        if !window.contains(&pose)
                             || !on_wall(&pose, oi, wa, params)
                             || !on_wall(&pose, oj, wb, params)
                         {
@@ -593,10 +629,7 @@ mod tests {
         let params = RelocalizeParams::default();
         let global = relocalize(&lines, &map, &mount, &SearchWindow::global(), &params).unwrap();
         assert!(!global.is_unambiguous(&params), "{global:?}");
-        let near = SearchWindow {
-            center: Point2::new(2.3, 1.2),
-            radius: 1.0,
-        };
+        let near = SearchWindow::around(Point2::new(2.3, 1.2), 1.0);
         let local = relocalize(&lines, &map, &mount, &near, &params).unwrap();
         assert!(local.is_unambiguous(&params), "{local:?}");
         assert!((local.best.pose.x - 2.0).abs() < 1e-6 && (local.best.pose.y - 1.0).abs() < 1e-6);

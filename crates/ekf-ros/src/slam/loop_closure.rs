@@ -149,10 +149,7 @@ impl LoopClosures {
             near.iter().map(|&(j, _)| j),
             &self.localizer.laser_mount,
         );
-        let window = SearchWindow {
-            center: nalgebra::Point2::new(here.x, here.y),
-            radius: reach(anchor),
-        };
+        let window = SearchWindow::around(nalgebra::Point2::new(here.x, here.y), reach(anchor));
         let walls = keys.chain_walls(
             poses,
             k,

@@ -1,0 +1,145 @@
+//! A relocalization's candidates verified over real scans: a candidate the odometry
+//! carries with a heading error larger than the search's tolerance is found again within
+//! its own uncertainty, and scored where the scan fits.
+
+#[path = "../../lrf-lines/tests/matching_support/mod.rs"]
+mod matching_support;
+
+use ekf_core::{Motion, Pose2};
+use ekf_fusion::motion::MotionStep;
+use ekf_fusion::verification::{restart_covariance, Verification};
+use lrf_lines::{
+    Hypothesis, LaserScan, LineMap, Localizer, LocalizerConfig, Relocalization, RelocalizeParams,
+};
+use matching_support::{map_of, ray_cast, Beams, Wall};
+use nalgebra::Point2;
+
+/// An L-shaped room: no two places in it look alike.
+fn l_room() -> Vec<Wall> {
+    let p = Point2::new;
+    vec![
+        (p(0.0, 0.0), p(8.0, 0.0)),
+        (p(8.0, 0.0), p(8.0, 3.0)),
+        (p(8.0, 3.0), p(3.0, 3.0)),
+        (p(3.0, 3.0), p(3.0, 7.0)),
+        (p(3.0, 7.0), p(0.0, 7.0)),
+        (p(0.0, 7.0), p(0.0, 0.0)),
+    ]
+}
+
+/// 361 beams over a full turn, 1° apart.
+const BEAMS: Beams = Beams {
+    angle_min: -std::f64::consts::PI,
+    increment: std::f64::consts::PI / 180.0,
+    count: 361,
+    range_max: 20.0,
+};
+
+/// A localizer in `map` whose last scan was taken at `truth` (its own estimate is
+/// elsewhere: only the scan's lines matter here).
+fn scanned_at(map: LineMap, truth: &Pose2<f64>) -> Localizer {
+    let ranges = ray_cast(&l_room(), truth, &BEAMS, 0.0, None);
+    let scan = LaserScan {
+        angle_min: BEAMS.angle_min,
+        angle_increment: BEAMS.increment,
+        range_min: 0.05,
+        range_max: BEAMS.range_max,
+        ranges: &ranges,
+    };
+    let params = RelocalizeParams::default();
+    let mut localizer = Localizer::new(
+        LocalizerConfig::default(),
+        Pose2::new(5.0, 1.5, 2.0),
+        restart_covariance(&params),
+        map,
+    )
+    .unwrap();
+    localizer.update_scan(&scan).unwrap();
+    assert!(
+        localizer.last_lines().len() >= 4,
+        "the room's walls are seen"
+    );
+    localizer
+}
+
+#[test]
+fn a_candidate_carried_with_a_heading_error_is_found_within_its_uncertainty() {
+    let params = RelocalizeParams::default();
+    let start = Pose2::new(1.5, 1.5, 0.0);
+    // The robot drove 1 m and turned 0.5 rad; the odometry says it turned 0.35 rad
+    // (8.6° short), within the default noise's 3σ but far beyond the search's 3°.
+    let truth = start.compose(&Pose2::new(
+        1.0 * (0.25f64).cos(),
+        1.0 * (0.25f64).sin(),
+        0.5,
+    ));
+    let found = Relocalization {
+        best: Hypothesis {
+            pose: start,
+            inliers: 4,
+            score: 10.0,
+        },
+        runner_up: 0.0,
+        candidates: vec![Hypothesis {
+            pose: start,
+            inliers: 4,
+            score: 10.0,
+        }],
+        observed_length: 10.0,
+        hypotheses: 1,
+    };
+    let mut v = Verification::start(&found, &params).unwrap();
+    v.predict(
+        MotionStep::Odometry(Motion {
+            ds: 1.0,
+            dtheta: 0.35,
+        }),
+        &LocalizerConfig::default(),
+    )
+    .unwrap();
+    let localizer = scanned_at(map_of(&l_room()), &truth);
+    let fits = v.fits(&localizer, &params);
+    let fit = fits.fits[0];
+    assert!(
+        (fit.pose.x - truth.x).abs() < 0.02
+            && (fit.pose.y - truth.y).abs() < 0.02
+            && ekf_core::angle_diff(fit.pose.theta, truth.theta).abs() < 1f64.to_radians(),
+        "{fit:?} against {truth:?}"
+    );
+    assert!(
+        fit.score > 0.9 * fits.observed_length,
+        "{fit:?} of {fits:?}"
+    );
+    // Where the odometry carried it, the scan's lines do not lie on the walls.
+    let carried = localizer
+        .fit_poses(&[start.compose(&Pose2::new(0.98, 0.17, 0.35))], &params)
+        .fits[0];
+    assert!(carried.score < 0.5 * fit.score, "{carried:?}");
+}
+
+#[test]
+fn a_candidate_is_not_moved_beyond_its_uncertainty() {
+    // The candidate is 1.1 m and 20° from where the robot is: the right pose lies outside
+    // its window (0.46 m, 7.7°), so it is scored where it was carried, and scores little
+    // there.
+    let params = RelocalizeParams::default();
+    let truth = Pose2::new(2.5, 1.5, 0.0);
+    let wrong = Pose2::new(1.5, 2.0, 0.35);
+    let hypothesis = Hypothesis {
+        pose: wrong,
+        inliers: 3,
+        score: 5.0,
+    };
+    let found = Relocalization {
+        best: hypothesis,
+        runner_up: 0.0,
+        candidates: vec![hypothesis],
+        observed_length: 10.0,
+        hypotheses: 1,
+    };
+    let v = Verification::start(&found, &params).unwrap();
+    let localizer = scanned_at(map_of(&l_room()), &truth);
+    let fit = v.fits(&localizer, &params).fits[0];
+    assert_eq!(fit.pose, wrong);
+    assert!(fit.score < 0.5 * localizer.fit_poses(&[truth], &params).fits[0].score);
+}
