@@ -312,10 +312,13 @@ impl Fuser {
             MotionStep::Wheels(s) => self.localizer.predict_wheels(&s)?,
             MotionStep::Odometry(m) => self.localizer.predict_odometry(&m)?,
         }
+        let config = self.localizer.config();
         if let Some(pending) = self.tracking.verification.as_mut() {
-            pending
-                .predict(step, self.localizer.config())
-                .map_err(LocalizerError::Filter)?;
+            if pending.predict(step, config).is_err() {
+                // A candidate the motion model cannot carry: the verification ends, and
+                // the next lost scan searches again.
+                self.tracking.verification = None;
+            }
         }
         Ok(())
     }
@@ -479,9 +482,12 @@ impl Fuser {
         }
         let verify = !gap && (lost_now || self.tracking.lost_for > 0);
         if let Some(mut pending) = self.tracking.verification.take() {
-            pending
-                .add_scan(&self.localizer, &params)
-                .map_err(LocalizerError::Filter)?;
+            if pending.add_scan(&self.localizer, &params).is_err() {
+                // A candidate the scan cannot restart (a non-finite pose): refused.
+                self.counts.tracking.refused += 1;
+                self.tracking.lost_for += 1;
+                return Ok(());
+            }
             if !pending.done() {
                 self.tracking.verification = Some(pending);
                 self.tracking.lost_for += 1;

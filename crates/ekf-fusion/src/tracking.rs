@@ -43,15 +43,15 @@
 //! ([`lrf_lines::Relocalization::is_unambiguous`]).
 //!
 //! Either way, once the filter is restarted at the chosen pose (with the verified
-//! candidate's own covariance, or the search's resolution for a single scan's answer),
-//! the scan's lines must fuse at least [`MIN_VERIFIED_LINES`] of them there (the search
-//! has already placed the robot; requiring two that are not parallel here delayed
-//! `--global`'s lock-on in edmonton's open hall from scan 4 to 21); otherwise the filter is put back as it
-//! was. A relocalization within [`RelocalizeParams::distinct_distance`] and
+//! candidate's own covariance, or the search's resolution for a single scan's answer), the
+//! scan's lines must fuse at least [`MIN_VERIFIED_LINES`] of them there (the search has
+//! already placed the robot; requiring two that are not parallel here delayed `--global`'s
+//! lock-on in edmonton's open hall from scan 4 to 21); otherwise the filter is put back as
+//! it was. A relocalization within [`RelocalizeParams::distinct_distance`] and
 //! [`RelocalizeParams::distinct_angle`] of the estimate changes nothing. Every loss, its
 //! end and every relocalization are reported with the scan ([`crate::ScanFused`]; `ekf
-//! replay` writes them to `/ekf/diagnostics` as `ekf/tracking` and
-//! `ekf/relocalization`), and the counts include the scans spent lost.
+//! replay` writes them to `/ekf/diagnostics` as `ekf/tracking` and `ekf/relocalization`),
+//! and the counts include the scans spent lost.
 
 use alloc::vec::Vec;
 use lrf_lines::{RelocalizeParams, SearchWindow};

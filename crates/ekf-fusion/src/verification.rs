@@ -17,8 +17,9 @@
 //! Each candidate is tracked as a hypothesis of its own: a pose with a covariance,
 //! started at [`restart_covariance`] and predicted through every motion step with the
 //! filter's motion model and noise, so it grows as the filter's would. At each later
-//! scan the candidate is looked for within its 99 % region (position within
-//! `√χ²₂(0.99)` of its covariance's largest axis, heading within `√χ²₁(0.99) σ_θ`) by
+//! scan the candidate is looked for within 99 % bounds of its position and of its
+//! heading (position within `√χ²₂(0.99)` times its covariance's largest axis, heading
+//! within `√χ²₁(0.99) σ_θ`) by
 //! the same search ([`lrf_lines::relocalize()`] with a [`SearchWindow`] that bounds the
 //! heading too), and scored where the scan fits best, or where the odometry carried it
 //! if the search finds nothing better. Scoring only the carried pose refused the right
@@ -32,7 +33,7 @@ use lrf_lines::{
     HeadingWindow, Localizer, LocalizerConfig, PoseFits, Relocalization, RelocalizeParams,
     SearchWindow,
 };
-use nalgebra::{Matrix3, Point2, SymmetricEigen, Vector3};
+use nalgebra::{Matrix3, Point2, Vector3};
 
 use crate::motion::MotionStep;
 
@@ -66,12 +67,15 @@ struct Candidate {
 }
 
 impl Candidate {
-    /// Where the next scan may place the candidate: its 99 % region.
+    /// Where the next scan may place the candidate: its position within the circle that
+    /// holds the 99 % ellipse of its position covariance (`√χ²₂(0.99)` times the
+    /// largest axis, `λ_max = (a + c)/2 + √(((a − c)/2)² + b²)` for `[[a, b], [b, c]]`),
+    /// its heading within `√χ²₁(0.99) σ_θ`.
     fn window(&self) -> SearchWindow {
         let p = self.ekf.covariance();
         let pose = self.ekf.pose();
-        let xy = p.fixed_view::<2, 2>(0, 0).into_owned();
-        let largest = SymmetricEigen::new(xy).eigenvalues.max().max(0.0);
+        let (a, b, c) = (p[(0, 0)], p[(0, 1)], p[(1, 1)]);
+        let largest = ((a + c) / 2.0 + libm::hypot((a - c) / 2.0, b)).max(0.0);
         SearchWindow {
             center: Point2::new(pose.x, pose.y),
             radius: libm::sqrt(CHI2_2_99 * largest),
@@ -177,14 +181,21 @@ impl Verification {
         fits
     }
 
-    /// Adds a scan's `fits`, one per candidate in candidate order: each candidate's
-    /// score and inliers grow by its fit's, and a candidate whose fit lies elsewhere than
-    /// where it was carried moves there, with [`restart_covariance`].
+    /// Adds a scan's `fits`, one per candidate in candidate order (as
+    /// [`fits`](Self::fits) returns them): each candidate's score and inliers grow by its
+    /// fit's, and a candidate whose fit's pose differs from the pose it was carried to
+    /// (the search found the scan's best fit elsewhere in its window) moves there, with
+    /// [`restart_covariance`].
     pub fn add_fits(
         &mut self,
         fits: &PoseFits,
         params: &RelocalizeParams,
     ) -> Result<(), ekf_core::Error> {
+        debug_assert_eq!(
+            fits.fits.len(),
+            self.candidates.len(),
+            "one fit per candidate"
+        );
         for (c, fit) in self.candidates.iter_mut().zip(&fits.fits) {
             if fit.pose != c.ekf.pose() {
                 c.ekf = Ekf::new(fit.pose, restart_covariance(params))?;

@@ -1,11 +1,14 @@
 //! The relocalization search ([`lrf_lines::relocalize`]) over a 500-segment map: the
 //! bundled ACES building map (268 walls) plus 232 of its walls again 1 km away, with the
-//! walls within 8 m of a pose in the building seen as the scan's lines. A local search
-//! (a 3 m window, as after a motion gap) and a search of the whole map.
+//! walls within 8 m of a pose in the building seen as the scan's lines. A candidate's
+//! window during a verification, a local search (a 3 m window, as after a motion gap)
+//! and a search of the whole map.
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use ekf_core::Pose2;
-use lrf_lines::{relocalize, LineMap, MapSegment, ObservedLine, RelocalizeParams, SearchWindow};
+use lrf_lines::{
+    relocalize, HeadingWindow, LineMap, MapSegment, ObservedLine, RelocalizeParams, SearchWindow,
+};
 use nalgebra::{Matrix2, Point2};
 use std::hint::black_box;
 
@@ -58,7 +61,19 @@ fn bench(c: &mut Criterion) {
     let params = RelocalizeParams::default();
     let mount = Pose2::identity();
     let local = SearchWindow::around(Point2::new(robot.x + 1.0, robot.y - 0.5), 3.0);
+    // What a verification looks at for one candidate (ekf-fusion's verification.rs): its
+    // 99 % bounds after a scan interval of motion, 0.5 m and 8° around a pose off by
+    // 0.2 m and 3°.
+    let candidate = SearchWindow {
+        center: Point2::new(robot.x + 0.2, robot.y),
+        radius: 0.5,
+        heading: Some(HeadingWindow {
+            theta: robot.theta + 3f64.to_radians(),
+            tolerance: 8f64.to_radians(),
+        }),
+    };
     for (name, window) in [
+        ("relocalize candidate 0.5 m 8 deg, 500 walls", candidate),
         ("relocalize local 3 m, 500 walls", local),
         ("relocalize global, 500 walls", SearchWindow::global()),
     ] {

@@ -227,14 +227,13 @@ pub fn relocalize(
     let observed = robot_lines(lines, mount, params);
     let observed_length: f64 = observed.iter().map(|l| l.length).sum();
     // A wall can hold a seen line only if it comes within the line's range of the window.
-    let reach = window.radius
-        + observed
-            .iter()
-            .map(|l| l.a.coords.norm().max(l.b.coords.norm()))
-            .fold(0.0, f64::max);
-    let index = WallIndex::new(map, params.inlier_distance, |w| {
-        w.distance_to(&window.center) <= reach
-    });
+    let reach = window.radius + range_of(&observed);
+    let index = WallIndex::new(
+        map,
+        params.inlier_distance,
+        |w| w.distance_to(&window.center) <= reach,
+        |w| w.distance_to(&window.center) <= reach + params.inlier_distance,
+    );
     // Pairs with the two longest lines: one of them may be clutter the map lacks.
     let anchors = 2;
 
@@ -317,6 +316,15 @@ pub fn relocalize(
     })
 }
 
+/// The farthest end point of `observed` from the robot (m): a wall farther than this
+/// from the robot cannot hold any of the lines.
+fn range_of(observed: &[RobotLine]) -> f64 {
+    observed
+        .iter()
+        .map(|l| l.a.coords.norm().max(l.b.coords.norm()))
+        .fold(0.0, f64::max)
+}
+
 /// The scan's lines usable by the search, in the robot frame (laser at `mount`): those
 /// at least [`RelocalizeParams::min_line_length`] long, the longest
 /// [`RelocalizeParams::max_lines`] of them, longest first.
@@ -367,7 +375,17 @@ pub fn fit_poses(
     params: &RelocalizeParams,
 ) -> PoseFits {
     let observed = robot_lines(lines, mount, params);
-    let index = WallIndex::new(map, params.inlier_distance, |_| false);
+    let reach = range_of(&observed) + params.inlier_distance;
+    let index = WallIndex::new(
+        map,
+        params.inlier_distance,
+        |_| false,
+        |w| {
+            poses
+                .iter()
+                .any(|p| w.distance_to(&Point2::new(p.x, p.y)) <= reach)
+        },
+    );
     PoseFits {
         fits: poses
             .iter()
@@ -389,18 +407,26 @@ struct WallIndex {
 }
 
 impl WallIndex {
-    /// The walls of `map` that pass `keep`, by direction, and all walls by place.
-    fn new(map: &LineMap, margin: f64, keep: impl Fn(&MapSegment) -> bool) -> Self {
+    /// The walls of `map` that pass `pair` by direction (the walls a line pair may be
+    /// put on), and those that pass `place` by place (the walls an observed line may lie
+    /// on: every wall within reach of where the robot may be, so leaving out the others
+    /// changes no score).
+    fn new(
+        map: &LineMap,
+        margin: f64,
+        pair: impl Fn(&MapSegment) -> bool,
+        place: impl Fn(&MapSegment) -> bool,
+    ) -> Self {
         let mut by_angle: Vec<(f64, usize)> = map
             .segments
             .iter()
             .enumerate()
-            .filter(|(_, s)| keep(s))
+            .filter(|(_, s)| pair(s))
             .map(|(i, s)| (direction_angle(&s.start, &s.end), i))
             .collect();
         by_angle.sort_by(|x, y| x.0.total_cmp(&y.0));
         let mut cells: BTreeMap<(i64, i64), Vec<usize>> = BTreeMap::new();
-        for (i, s) in map.segments.iter().enumerate() {
+        for (i, s) in map.segments.iter().enumerate().filter(|(_, s)| place(s)) {
             // Samples along the wall at most half a cell apart, each marking the cells
             // of the box around it that reaches half-way to the next sample plus the
             // margin (narrower than a cell, so its four corners find every cell).
@@ -633,6 +659,42 @@ mod tests {
         let local = relocalize(&lines, &map, &mount, &near, &params).unwrap();
         assert!(local.is_unambiguous(&params), "{local:?}");
         assert!((local.best.pose.x - 2.0).abs() < 1e-6 && (local.best.pose.y - 1.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn a_heading_window_keeps_only_the_poses_turned_within_it() {
+        // The rectangle again: the robot's pose and its half-turn twin both fit, anywhere
+        // in the room; a heading window tells them apart.
+        let map = LineMap::new(alloc::vec![
+            wall(0.0, 0.0, 8.0, 0.0),
+            wall(8.0, 0.0, 8.0, 4.0),
+            wall(8.0, 4.0, 0.0, 4.0),
+            wall(0.0, 4.0, 0.0, 0.0),
+        ]);
+        let mount = Pose2::identity();
+        let robot = Pose2::new(2.0, 1.0, 0.2);
+        let lines = observe(&map, &robot, &mount);
+        let params = RelocalizeParams::default();
+        let turned = |theta: f64| SearchWindow {
+            center: Point2::new(4.0, 2.0),
+            radius: 10.0,
+            heading: Some(HeadingWindow {
+                theta,
+                tolerance: 5f64.to_radians(),
+            }),
+        };
+        let found = |window: &SearchWindow| relocalize(&lines, &map, &mount, window, &params);
+        let right = found(&turned(0.2 + 4f64.to_radians())).expect("the robot's pose");
+        assert!(right.is_unambiguous(&params), "{right:?}");
+        let p = right.best.pose;
+        assert!((p.x - 2.0).hypot(p.y - 1.0) < 1e-6 && angle_diff(p.theta, 0.2).abs() < 1e-9);
+        let twin = found(&turned(0.2 + PI)).expect("the twin").best.pose;
+        assert!((twin.x - 6.0).hypot(twin.y - 3.0) < 1e-6, "{twin:?}");
+        assert!(angle_diff(twin.theta, 0.2 + PI).abs() < 1e-9);
+        // 6° off either: nothing in the window.
+        assert!(found(&turned(0.2 + 6f64.to_radians())).is_none());
+        assert!(SearchWindow::around(Point2::new(4.0, 2.0), 10.0).contains(&twin));
+        assert!(!turned(0.2).contains(&twin));
     }
 
     #[test]

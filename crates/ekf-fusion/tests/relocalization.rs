@@ -1,6 +1,7 @@
-//! A relocalization's candidates verified over real scans: a candidate the odometry
-//! carries with a heading error larger than the search's tolerance is found again within
-//! its own uncertainty, and scored where the scan fits.
+//! Loss and relocalization over ray-cast scans: a relocalization's candidate the
+//! odometry carries with a heading error larger than the search's tolerance is found
+//! again within its own uncertainty and scored where the scan fits; a lost filter is not
+//! called found again by two parallel walls.
 
 #[path = "../../lrf-lines/tests/matching_support/mod.rs"]
 mod matching_support;
@@ -8,11 +9,12 @@ mod matching_support;
 use ekf_core::{Motion, Pose2};
 use ekf_fusion::motion::MotionStep;
 use ekf_fusion::verification::{restart_covariance, Verification};
+use ekf_fusion::{Fuser, FusionConfig, Input, Mode, Scan, Tracking};
 use lrf_lines::{
     Hypothesis, LaserScan, LineMap, Localizer, LocalizerConfig, Relocalization, RelocalizeParams,
 };
 use matching_support::{map_of, ray_cast, Beams, Wall};
-use nalgebra::Point2;
+use nalgebra::{Matrix3, Point2, Vector3};
 
 /// An L-shaped room: no two places in it look alike.
 fn l_room() -> Vec<Wall> {
@@ -110,9 +112,11 @@ fn a_candidate_carried_with_a_heading_error_is_found_within_its_uncertainty() {
         fit.score > 0.9 * fits.observed_length,
         "{fit:?} of {fits:?}"
     );
-    // Where the odometry carried it, the scan's lines do not lie on the walls.
+    // Where the odometry carried it (along the mid-angle, as the motion model moves it),
+    // the scan's lines do not lie on the walls.
+    let odometry = Pose2::new((0.175f64).cos(), (0.175f64).sin(), 0.35);
     let carried = localizer
-        .fit_poses(&[start.compose(&Pose2::new(0.98, 0.17, 0.35))], &params)
+        .fit_poses(&[start.compose(&odometry)], &params)
         .fits[0];
     assert!(carried.score < 0.5 * fit.score, "{carried:?}");
 }
@@ -142,4 +146,88 @@ fn a_candidate_is_not_moved_beyond_its_uncertainty() {
     let fit = v.fits(&localizer, &params).fits[0];
     assert_eq!(fit.pose, wrong);
     assert!(fit.score < 0.5 * localizer.fit_poses(&[truth], &params).fits[0].score);
+}
+
+/// A corridor along x, 2 m wide, closed at x = 6 by an end wall.
+fn corridor() -> Vec<Wall> {
+    let p = Point2::new;
+    vec![
+        (p(-20.0, 1.0), p(6.0, 1.0)),
+        (p(-20.0, -1.0), p(6.0, -1.0)),
+        (p(6.0, -1.0), p(6.0, 1.0)),
+    ]
+}
+
+/// A scan from `pose` among `walls` with 361 beams over a full turn, seeing up to
+/// `range_max`.
+fn scan_among(walls: &[Wall], pose: &Pose2<f64>, range_max: f64) -> Input {
+    let beams = Beams { range_max, ..BEAMS };
+    Input::Scan(Scan {
+        angle_min: beams.angle_min,
+        angle_increment: beams.increment,
+        range_min: 0.05,
+        range_max,
+        ranges: ray_cast(walls, pose, &beams, 0.0, None),
+    })
+}
+
+#[test]
+fn a_lost_filter_is_found_again_by_a_corner_not_by_two_parallel_walls() {
+    let config = FusionConfig {
+        mode: Mode::Laser,
+        tracking: Tracking::FromInitialPose,
+        ..FusionConfig::default()
+    };
+    let at = Pose2::new(0.0, 0.0, 0.0);
+    let p0 = Matrix3::from_diagonal(&Vector3::new(0.01, 0.01, 0.001));
+    let mut fuser = Fuser::new(&config, at, p0, 0, Some(map_of(&corridor()))).unwrap();
+    let mut t = 0;
+    let mut fuse = |fuser: &mut Fuser, input: &Input| {
+        t += 100_000_000;
+        fuser.fuse(t, input, &mut ()).unwrap();
+    };
+    // Three scans of a room the map does not have (a square 7 m across, turned 30°):
+    // lines, none fused: lost.
+    let p = Point2::new;
+    let elsewhere: Vec<Wall> = [(-3.5, -3.5), (3.5, -3.5), (3.5, 3.5), (-3.5, 3.5)]
+        .iter()
+        .zip([(3.5, -3.5), (3.5, 3.5), (-3.5, 3.5), (-3.5, -3.5)])
+        .map(|(&(x0, y0), (x1, y1))| {
+            let turn = Pose2::new(0.3, -0.2, 30f64.to_radians());
+            (
+                turn.transform_point(&p(x0, y0)),
+                turn.transform_point(&p(x1, y1)),
+            )
+        })
+        .collect();
+    for _ in 0..3 {
+        fuse(&mut fuser, &scan_among(&elsewhere, &at, 20.0));
+    }
+    assert!(
+        fuser.lost_for() > 0,
+        "lines and none fused three times: lost"
+    );
+    // The corridor's two walls, the end wall out of reach: they fuse, but a place along
+    // the corridor is not fixed by them, and the search finds no pose in parallel lines.
+    for _ in 0..3 {
+        fuse(&mut fuser, &scan_among(&corridor(), &at, 4.0));
+        assert_eq!(
+            fuser
+                .localizer()
+                .last_fusions()
+                .iter()
+                .filter(|f| f.accepted)
+                .count(),
+            2
+        );
+        assert!(
+            fuser.lost_for() > 0,
+            "two parallel walls do not end the loss"
+        );
+    }
+    // The end wall comes into reach: a corner.
+    fuse(&mut fuser, &scan_among(&corridor(), &at, 10.0));
+    assert_eq!(fuser.lost_for(), 0, "{:?}", fuser.counts().tracking);
+    let pose = fuser.localizer().pose();
+    assert!(pose.x.abs() < 0.01 && pose.y.abs() < 0.01, "{pose:?}");
 }
