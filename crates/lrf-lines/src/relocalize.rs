@@ -640,15 +640,20 @@ mod tests {
         }
     }
 
-    #[test]
-    fn a_window_keeps_the_search_local_and_a_symmetric_room_is_ambiguous() {
-        // A plain rectangle looks the same from a pose and its half-turn twin.
-        let map = LineMap::new(alloc::vec![
+    /// A plain 8 m × 4 m rectangle.
+    fn rectangle() -> LineMap {
+        LineMap::new(alloc::vec![
             wall(0.0, 0.0, 8.0, 0.0),
             wall(8.0, 0.0, 8.0, 4.0),
             wall(8.0, 4.0, 0.0, 4.0),
             wall(0.0, 4.0, 0.0, 0.0),
-        ]);
+        ])
+    }
+
+    #[test]
+    fn a_window_keeps_the_search_local_and_a_symmetric_room_is_ambiguous() {
+        // A plain rectangle looks the same from a pose and its half-turn twin.
+        let map = rectangle();
         let mount = Pose2::identity();
         let robot = Pose2::new(2.0, 1.0, 0.2);
         let lines = observe(&map, &robot, &mount);
@@ -665,12 +670,7 @@ mod tests {
     fn a_heading_window_keeps_only_the_poses_turned_within_it() {
         // The rectangle again: the robot's pose and its half-turn twin both fit, anywhere
         // in the room; a heading window tells them apart.
-        let map = LineMap::new(alloc::vec![
-            wall(0.0, 0.0, 8.0, 0.0),
-            wall(8.0, 0.0, 8.0, 4.0),
-            wall(8.0, 4.0, 0.0, 4.0),
-            wall(0.0, 4.0, 0.0, 0.0),
-        ]);
+        let map = rectangle();
         let mount = Pose2::identity();
         let robot = Pose2::new(2.0, 1.0, 0.2);
         let lines = observe(&map, &robot, &mount);
