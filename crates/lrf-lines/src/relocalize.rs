@@ -366,7 +366,7 @@ pub struct PoseFits {
 
 /// Scores the scan's `lines` (laser at `mount`) at each of `poses` against `map`, as
 /// [`relocalize`] scores its hypotheses: the verification of a search's candidates over
-/// the scans after it, each candidate carried there by the odometry.
+/// the scans after it, each candidate where the motion model carried it.
 pub fn fit_poses(
     lines: &[ObservedLine],
     map: &LineMap,
