@@ -54,7 +54,7 @@
 //! and the counts include the scans spent lost.
 
 use alloc::vec::Vec;
-use lrf_lines::{RelocalizeParams, SearchWindow};
+use lrf_lines::{direction_diff, RelocalizeParams, SearchWindow};
 use nalgebra::{Matrix3, Point2};
 
 /// Scans in a row with lines but none fused before the filter counts as lost.
@@ -75,10 +75,9 @@ pub const MIN_VERIFIED_LINES: usize = 2;
 pub fn fix_position(normals: &[f64], params: &RelocalizeParams) -> bool {
     normals.len() >= MIN_VERIFIED_LINES
         && normals.iter().enumerate().any(|(i, a)| {
-            normals[i + 1..].iter().any(|b| {
-                let d = libm::fabs(ekf_core::wrap_angle(2.0 * (a - b))) / 2.0;
-                d >= params.min_pair_angle
-            })
+            normals[i + 1..]
+                .iter()
+                .any(|b| libm::fabs(direction_diff(*a, *b)) >= params.min_pair_angle)
         })
 }
 

@@ -384,6 +384,14 @@ mod tests {
     }
 
     #[test]
+    fn the_window_constants_are_the_chi_square_quantiles() {
+        for (constant, dof) in [(CHI2_2_99, 2), (CHI2_1_99, 1)] {
+            let q = ekf_core::chi_square_quantile(0.99, dof).unwrap();
+            assert!((constant - q).abs() < 1e-9 * q, "{constant} against {q}");
+        }
+    }
+
+    #[test]
     fn a_fit_elsewhere_moves_the_candidate_and_restarts_its_covariance() {
         let params = RelocalizeParams::default();
         let mut v = Verification::start(&search(vec![hypothesis(0.0, 5.0)], 6.0), &params).unwrap();

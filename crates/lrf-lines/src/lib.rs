@@ -31,8 +31,8 @@ pub use matching::{
 pub use observed::ObservedLine;
 pub use point3d::pitched_scan_point;
 pub use relocalize::{
-    fit_poses, relocalize, HeadingWindow, Hypothesis, PoseFits, Relocalization, RelocalizeParams,
-    SearchWindow,
+    direction_diff, fit_poses, relocalize, HeadingWindow, Hypothesis, PoseFits, Relocalization,
+    RelocalizeParams, SearchWindow,
 };
 pub use scan::LaserScan;
 pub use scan::ScanError;

@@ -199,8 +199,10 @@ fn direction_angle(a: &Point2<f64>, b: &Point2<f64>) -> f64 {
     }
 }
 
-/// Difference of two direction angles modulo π, in (−π/2, π/2].
-fn direction_diff(a: f64, b: f64) -> f64 {
+/// Difference of two direction angles modulo π, in (−π/2, π/2]: how far two lines are
+/// from parallel, whether given by their directions or by their normals. The search pairs
+/// only lines at least [`RelocalizeParams::min_pair_angle`] apart by it.
+pub fn direction_diff(a: f64, b: f64) -> f64 {
     let d = wrap_angle(2.0 * (a - b)) / 2.0;
     if d <= -PI / 2.0 {
         d + PI
