@@ -139,7 +139,7 @@ def test_line_map_geometry_json_and_files(room_map, tmp_path):
     assert json.loads(room_map.to_json())["format"] == "ekf-loc line map"
     assert np.array_equal(ekf_loc.LineMap.from_json(room_map.to_json()).lines, room_map.lines)
     aces = ekf_loc.LineMap.load(ACES_MAP)
-    assert len(aces) == 268 and aces.segments.shape == (268, 2, 2)
+    assert len(aces) == 321 and aces.segments.shape == (321, 2, 2)
 
 
 def test_maps_from_one_scan_and_from_many(room_map):

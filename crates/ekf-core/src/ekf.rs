@@ -8,7 +8,7 @@
 
 use crate::kinematics::{DiffDrive, Motion, WheelSpeeds};
 use crate::measurement::Measurement;
-use crate::noise::{OdometryNoise, WheelNoise};
+use crate::noise::{OdometryNoise, OdometryTravel, WheelNoise};
 use crate::validate::{all_finite, covariance, finite, non_negative, semi_definite, spd_inverse};
 use crate::{ChiSquareGate, Error, Pose2, Real};
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
@@ -231,6 +231,27 @@ impl<T: Real> Ekf<T> {
         // diag(σ_s², σ_e², σ_θ²) is positive semi-definite by construction.
         let sigma = noise.motion_covariance(motion);
         all_finite(sigma.as_slice(), "motion noise")?;
+        Ok(self.propagate(motion, &sigma))
+    }
+
+    /// Prediction from an odometry delta `(Δs, Δθ)` taken after `travel` within the
+    /// current noise interval: the noise is the step's share of the interval's
+    /// ([`OdometryNoise::interval_covariance`]), and `travel` advances. Returns `A` (see
+    /// [`Ekf::predict`]).
+    pub fn predict_odometry_in(
+        &mut self,
+        motion: &Motion<T>,
+        noise: &OdometryNoise<T>,
+        travel: &mut OdometryTravel<T>,
+    ) -> Result<Matrix3<T>, Error> {
+        finite(motion.ds, "motion ds")?;
+        finite(motion.dtheta, "motion dtheta")?;
+        noise.validated()?;
+        let mut advanced = *travel;
+        // Increments of variances that grow with the travel: positive semi-definite.
+        let sigma = noise.interval_covariance(&mut advanced, motion);
+        all_finite(sigma.as_slice(), "motion noise")?;
+        *travel = advanced;
         Ok(self.propagate(motion, &sigma))
     }
 

@@ -64,6 +64,6 @@ pub use kinematics::{DiffDrive, Linearization, Motion, WheelSpeeds};
 pub use measurement::{
     heading_from_compass_bearing, Compass, CompassCalibration, LaserLine, Measurement, Position,
 };
-pub use noise::{OdometryNoise, WheelNoise};
+pub use noise::{OdometryNoise, OdometryTravel, WheelNoise};
 pub use real::Real;
 pub use setting::{Expected, InvalidSetting};

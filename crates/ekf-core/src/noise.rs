@@ -87,6 +87,12 @@ impl<T: Real> Default for WheelNoise<T> {
 /// only to steps where the robot moved: a robot at rest with zero odometry delta gains no
 /// uncertainty, however often its odometry is published. A field missing when
 /// deserialized takes the default's.
+///
+/// A step is either one odometry message ([`motion_covariance`](Self::motion_covariance),
+/// [`Ekf::predict_odometry`](crate::Ekf::predict_odometry)) or, as the localizer applies
+/// it, the whole motion between two corrections, each message adding its share
+/// ([`interval_covariance`](Self::interval_covariance), [`OdometryTravel`]), which
+/// does not depend on the message rate.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[cfg_attr(
@@ -100,17 +106,17 @@ impl<T: Real> Default for WheelNoise<T> {
 pub struct OdometryNoise<T> {
     /// `a₁`: distance noise per metre travelled (m/m).
     pub a1: T,
-    /// `b₁`: distance noise per moving step (m).
+    /// `b₁`: distance noise per step with motion (m).
     pub b1: T,
     /// `a₂`: lateral noise per metre travelled (m/m).
     pub a2: T,
-    /// `b₂`: lateral noise per moving step (m).
+    /// `b₂`: lateral noise per step with motion (m).
     pub b2: T,
     /// `a₃`: heading noise per radian turned (rad/rad).
     pub a3: T,
     /// `a₄`: heading noise per metre travelled (rad/m).
     pub a4: T,
-    /// `b₃`: heading noise per moving step (rad).
+    /// `b₃`: heading noise per step with motion (rad).
     pub b3: T,
 }
 
@@ -149,6 +155,65 @@ impl<T: Real> OdometryNoise<T> {
     pub fn motion_covariance(&self, m: &Motion<T>) -> Matrix3<T> {
         let (ss, se, st) = self.sigmas(m);
         Matrix3::from_diagonal(&nalgebra::Vector3::new(ss * ss, se * se, st * st))
+    }
+
+    /// The noise of the step `m` taken after `travel` within one noise interval, and
+    /// `travel` advanced by it: the increment `σ²(L + |Δs|, R + |Δθ|) − σ²(L, R)` of each
+    /// of the three variances of [`sigmas`](Self::sigmas), with `(L, R)` the distance and
+    /// turn travelled in the interval so far (`σ² = 0` before any motion).
+    ///
+    /// Over an interval these increments add up to the variances of one step covering it,
+    /// however many odometry messages it took: the noise is that of the motion between
+    /// two corrections, not of the message rate (see [`OdometryTravel`]).
+    pub fn interval_covariance(&self, travel: &mut OdometryTravel<T>, m: &Motion<T>) -> Matrix3<T> {
+        let before = travel.sigmas(self);
+        travel.distance += m.ds.abs();
+        travel.turn += m.dtheta.abs();
+        let after = travel.sigmas(self);
+        let increment = |a: T, b: T| (a * a - b * b).max(T::zero());
+        Matrix3::from_diagonal(&nalgebra::Vector3::new(
+            increment(after.0, before.0),
+            increment(after.1, before.1),
+            increment(after.2, before.2),
+        ))
+    }
+}
+
+/// Distance and turn travelled since the filter was last corrected: the interval over
+/// which [`OdometryNoise`] applies.
+///
+/// The model's proportional terms describe errors that persist over a stretch of motion
+/// (a wheel radius or track width slightly off, a turn that slips the same way
+/// throughout), and its constant terms one disturbance per stretch. Applied to every
+/// odometry message as if each message's error were independent of the next, the same
+/// metre of motion would get `n` times less variance from the proportional terms and `n`
+/// times more from the constant ones when it arrives in `n` messages: 50 Hz odometry
+/// would make the filter over-confident and 1 Hz odometry under-confident. Accumulated
+/// over the interval between two corrections instead (as AMCL applies its model once per
+/// filter update), the noise depends on the motion only.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct OdometryTravel<T> {
+    /// Distance travelled `Σ|Δs|` (m).
+    pub distance: T,
+    /// Turn `Σ|Δθ|` (rad).
+    pub turn: T,
+}
+
+impl<T: Real> OdometryTravel<T> {
+    /// Starts a new interval (after a correction).
+    pub fn reset(&mut self) {
+        *self = Self {
+            distance: T::zero(),
+            turn: T::zero(),
+        };
+    }
+
+    /// The model's standard deviations for the whole travel so far.
+    fn sigmas(&self, noise: &OdometryNoise<T>) -> (T, T, T) {
+        noise.sigmas(&Motion {
+            ds: self.distance,
+            dtheta: self.turn,
+        })
     }
 }
 

@@ -289,7 +289,17 @@ impl Fuser {
         };
         let (step, t0, t1, contradiction) = match step {
             Ok(step) => step,
-            Err(skip) => return Ok(Fused::Skipped(skip)),
+            Err(skip) => {
+                if let Skip::Implausible {
+                    field: "odometry step",
+                    ..
+                } = skip
+                {
+                    // Where the robot went is unknown: the laser decides at the next scan.
+                    self.tracking.motion_jumped = true;
+                }
+                return Ok(Fused::Skipped(skip));
+            }
         };
         // Only the part of the interval after the time the state refers to.
         let Some(part) = self.clock.advance(step, t0, t1) else {
@@ -601,7 +611,7 @@ impl Fuser {
         let Some(fused_ns) = self.clock.state_ns() else {
             return Ok(None);
         };
-        let mut ekf = *self.localizer.ekf();
+        let (mut ekf, mut travel) = (*self.localizer.ekf(), self.localizer.travel());
         let (mut clock, mut wheels, mut odometry) =
             (self.clock, self.wheels.clone(), self.odometry.clone());
         let config = self.localizer.config();
@@ -613,7 +623,7 @@ impl Fuser {
                 continue;
             };
             if let Some(part) = clock.advance(step, t0, t1) {
-                part.predict(&mut ekf, config)
+                part.predict(&mut ekf, config, &mut travel)
                     .map_err(LocalizerError::Filter)?;
             }
             t_ns = t_ns.max(stamp);

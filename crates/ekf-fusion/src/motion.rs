@@ -1,7 +1,7 @@
 //! Motion steps over time intervals, and the clock that says which part of a step the
 //! state has not yet been predicted through.
 
-use ekf_core::{Ekf, Motion, WheelSpeeds};
+use ekf_core::{Ekf, Motion, OdometryTravel, WheelSpeeds};
 use lrf_lines::LocalizerConfig;
 
 /// Longest time after the end of the last motion step up to which the state is brought
@@ -36,17 +36,22 @@ impl MotionStep {
         }
     }
 
-    /// Predicts `ekf` through the step with the robot and noise of `config`.
+    /// Predicts `ekf` through the step with the robot and noise of `config`, an odometry
+    /// step's noise taken after `travel` in its interval (see [`OdometryTravel`]), as
+    /// [`lrf_lines::Localizer`] predicts.
     pub fn predict(
         self,
         ekf: &mut Ekf<f64>,
         config: &LocalizerConfig,
+        travel: &mut OdometryTravel<f64>,
     ) -> Result<(), ekf_core::Error> {
         match self {
             MotionStep::Wheels(s) => ekf
                 .predict_wheels(&config.robot, &s, &config.wheel_noise)
                 .map(drop),
-            MotionStep::Odometry(m) => ekf.predict_odometry(&m, &config.odometry_noise).map(drop),
+            MotionStep::Odometry(m) => ekf
+                .predict_odometry_in(&m, &config.odometry_noise, travel)
+                .map(drop),
         }
     }
 

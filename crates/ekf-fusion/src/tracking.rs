@@ -123,6 +123,8 @@ pub struct Tracking {
     pub enabled: bool,
     /// A motion message came since the last scan.
     pub motion_since_scan: bool,
+    /// The odometry jumped since the last scan (a step faster than the robot drives).
+    pub motion_jumped: bool,
     /// The motion source has spoken at all.
     pub motion_seen: bool,
     /// Time of the last motion message (ns).
@@ -199,6 +201,7 @@ impl Tracking {
             return false;
         }
         let covered = core::mem::replace(&mut self.motion_since_scan, false);
+        let jumped = core::mem::replace(&mut self.motion_jumped, false);
         self.intervals += 1;
         self.covered += u64::from(covered);
         let rarely_covers = 4 * self.covered < self.intervals;
@@ -206,7 +209,7 @@ impl Tracking {
             (Some(last), Some(interval)) => t_ns.saturating_sub(last) as f64 > 2.0 * interval,
             _ => false,
         };
-        stale || (!covered && rarely_covers)
+        jumped || stale || (!covered && rarely_covers)
     }
 
     /// Notes a scan's outcome; returns whether the filter is lost now.

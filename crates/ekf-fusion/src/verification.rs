@@ -28,7 +28,7 @@
 //! model's 3σ).
 
 use alloc::vec::Vec;
-use ekf_core::{Ekf, Pose2};
+use ekf_core::{Ekf, OdometryTravel, Pose2};
 use lrf_lines::{
     HeadingWindow, Localizer, LocalizerConfig, PoseFits, Relocalization, RelocalizeParams,
     SearchWindow,
@@ -60,6 +60,8 @@ pub fn restart_covariance(params: &RelocalizeParams) -> Matrix3<f64> {
 struct Candidate {
     /// The candidate's pose at the latest step and its covariance.
     ekf: Ekf<f64>,
+    /// Odometry travelled since the last scan (the interval of the odometry noise).
+    travel: OdometryTravel<f64>,
     /// Summed score over the scans so far (m).
     score: f64,
     /// Summed inliers.
@@ -128,6 +130,7 @@ impl Verification {
             .map(|h| {
                 Ok(Candidate {
                     ekf: Ekf::new(h.pose, covariance)?,
+                    travel: OdometryTravel::default(),
                     score: h.score,
                     inliers: h.inliers,
                 })
@@ -149,7 +152,7 @@ impl Verification {
     ) -> Result<(), ekf_core::Error> {
         self.candidates
             .iter_mut()
-            .try_for_each(|c| step.predict(&mut c.ekf, config))
+            .try_for_each(|c| step.predict(&mut c.ekf, config, &mut c.travel))
     }
 
     /// Scores the last scan of `localizer` for every candidate ([`fits`](Self::fits))
@@ -200,6 +203,7 @@ impl Verification {
             if fit.pose != c.ekf.pose() {
                 c.ekf = Ekf::new(fit.pose, restart_covariance(params))?;
             }
+            c.travel.reset();
             c.score += fit.score;
             c.inliers += fit.inliers;
         }

@@ -148,15 +148,33 @@ impl WheelTracker {
     }
 }
 
+/// An odometry step is a jump when it is longer than this many times the RMS of the
+/// steps before it ...
+pub const JUMP_FACTOR: f64 = 10.0;
+
+/// ... and longer than this (m): more than a robot moves between two odometry messages
+/// at the rates robots publish them (1 m/s at 2 Hz).
+pub const JUMP_MIN_M: f64 = 0.5;
+
+/// Moving steps the RMS runs over (and the fewest before the jump test applies).
+pub const JUMP_HISTORY: u32 = 10;
+
 /// Motion steps from consecutive odometry poses.
 #[derive(Debug, Clone, Default)]
 pub struct OdometryTracker {
     previous: Option<(u64, Pose2<f64>)>,
+    /// Running mean of the squared lengths of the moving steps (m²).
+    step_square: f64,
+    /// Moving steps seen.
+    moving: u32,
 }
 
 impl OdometryTracker {
     /// The motion from the previous odometry pose to `pose` at `stamp_ns`, and the stamp
-    /// of the previous one (the start of the interval).
+    /// of the previous one (the start of the interval). A jump (see [`JUMP_FACTOR`]: a
+    /// glitch, a reset, a robot carried while its odometry counted) is refused as
+    /// implausible, the chain going on from `pose`. Speeds are not judged: the stamps of
+    /// real logs are too often broken for that.
     pub fn motion(&mut self, stamp_ns: u64, pose: &Pose2<f64>) -> Result<(Motion<f64>, u64), Skip> {
         let pose = pose
             .validated("pose")
@@ -174,6 +192,24 @@ impl OdometryTracker {
         self.previous = Some((stamp_ns, pose));
         let motion = Motion::from_odometry_poses(&p0, &pose)
             .map_err(|_| Skip::NonFinite { field: "pose" })?;
+        let length = libm::fabs(motion.ds);
+        if length == 0.0 {
+            return Ok((motion, t0));
+        }
+        let rms = libm::sqrt(self.step_square);
+        let jump = self.moving >= JUMP_HISTORY && length > JUMP_MIN_M.max(JUMP_FACTOR * rms);
+        // Every moving step counts, a jump too: a robot that really drives faster from
+        // now on is judged by its new steps after a few of them.
+        let weight = 1.0 / f64::from((self.moving + 1).min(JUMP_HISTORY));
+        self.step_square += weight * (length * length - self.step_square);
+        self.moving = self.moving.saturating_add(1);
+        if jump {
+            return Err(Skip::Implausible {
+                field: "odometry step",
+                expected: "at most 10 times the RMS of the steps before it, or 0.5 m (m)",
+                found: length,
+            });
+        }
         Ok((motion, t0))
     }
 }
@@ -183,6 +219,58 @@ mod tests {
     use super::*;
 
     const MS: u64 = 1_000_000;
+
+    /// Feeds odometry poses along x with the given step lengths, 100 ms apart; returns
+    /// which steps were refused as jumps.
+    fn jumps(steps: &[f64]) -> Vec<bool> {
+        let mut odometry = OdometryTracker::default();
+        let mut x = 0.0;
+        assert_eq!(
+            odometry.motion(0, &Pose2::new(x, 0.0, 0.0)),
+            Err(Skip::First)
+        );
+        (1..)
+            .zip(steps)
+            .map(|(k, step)| {
+                x += step;
+                match odometry.motion(k * 100 * MS, &Pose2::new(x, 0.0, 0.0)) {
+                    Ok((m, _)) => {
+                        assert!((m.ds - step).abs() < 1e-9);
+                        false
+                    }
+                    Err(Skip::Implausible { found, .. }) => {
+                        assert!((found - step).abs() < 1e-9);
+                        true
+                    }
+                    Err(other) => panic!("{other:?}"),
+                }
+            })
+            .collect()
+    }
+
+    #[test]
+    fn an_odometry_jump_is_refused_and_the_chain_goes_on_from_it() {
+        let mut steps = vec![0.05; 20];
+        steps.extend([2.0, 0.05, 0.05]);
+        let refused = jumps(&steps);
+        assert_eq!(refused.iter().filter(|&&j| j).count(), 1, "{refused:?}");
+        assert!(refused[20], "the 2 m step");
+    }
+
+    #[test]
+    fn steps_that_grow_stops_and_a_short_history_are_motion() {
+        // Speeding up from 0.02 to 0.5 m per step over 30 steps, standing still, then
+        // driving on; and a big step before ten moving steps are known.
+        let mut steps: Vec<f64> = (0..30).map(|k| 0.02 + 0.016 * f64::from(k)).collect();
+        steps.extend([0.0; 50]);
+        steps.extend([0.45, 0.5]);
+        assert!(jumps(&steps).iter().all(|j| !j));
+        assert!(jumps(&[0.05, 0.05, 3.0]).iter().all(|j| !j));
+        // Ten times the RMS but under half a metre: a slow robot that starts to drive.
+        let mut slow = vec![0.01; 20];
+        slow.push(0.3);
+        assert!(jumps(&slow).iter().all(|j| !j));
+    }
 
     #[test]
     fn angles_that_stand_still_against_their_velocities_give_way_after_three_readings() {

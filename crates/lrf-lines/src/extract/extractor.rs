@@ -5,6 +5,7 @@ use super::breakpoint::Breakpoint;
 use super::fit::{fit_line, fit_trimmed, LineFit, PointNoise};
 use super::merge::{mahalanobis_squared, merge_collinear, Candidate, MergeRule};
 use super::points::{collect, BeamTable, Points, Run, ScanPoints};
+use super::range_noise::range_noise;
 use super::split::split_runs;
 use super::{ExtractionError, ExtractionParams};
 use crate::{LaserScan, ObservedLine};
@@ -27,7 +28,20 @@ pub struct LineExtractor {
     candidates: Vec<Candidate>,
     /// Per line of the last scan, its range of `segments`.
     supports: Vec<Range<usize>>,
+    /// Scratch for the range noise measure.
+    noise_samples: Vec<f64>,
+    /// The last scan's range noise as measured (m), if it had enough samples.
+    measured_range_sigma: Option<f64>,
+    /// The split distance the last scan was extracted with (m).
+    split_distance: f64,
 }
+
+/// A scan whose measured range noise σ_ρ exceeds `range_sigma` is split where a point is
+/// farther from its chord than this many σ_ρ, when that is more than `split_distance`.
+/// Three: the measured σ_ρ already holds the scan's whole scatter (a reading quantised
+/// to 5 cm steps is at most 2.5 cm, 1.7σ, off), and a larger multiple leaves corners
+/// between walls at shallow angles unsplit (5σ of such a scanner is 12 cm).
+pub const SPLIT_SIGMAS: f64 = 3.0;
 
 impl LineExtractor {
     /// An extractor with validated `params`; the merge gate is the chi-square quantile
@@ -55,6 +69,9 @@ impl LineExtractor {
             segments: Vec::new(),
             candidates: Vec::new(),
             supports: Vec::new(),
+            noise_samples: Vec::new(),
+            measured_range_sigma: None,
+            split_distance: params.split_distance,
         })
     }
 
@@ -63,15 +80,27 @@ impl LineExtractor {
         &self.params
     }
 
+    /// The range noise σ_ρ (m) the last scan's points showed, if it had enough straight
+    /// stretches to tell: the scatter of each point about the chord of its two neighbours
+    /// (docs/ARCHITECTURE.md §3). A scanner noisier than `range_sigma` (one that reports
+    /// 5 cm steps, say) is then extracted and weighted with this instead.
+    pub fn measured_range_sigma(&self) -> Option<f64> {
+        self.measured_range_sigma
+    }
+
     /// Clears `out` and fills it with the lines of `scan`, in scan order.
     ///
     /// Steps: valid readings → points, cut into runs at invalid beams and at gaps over
     /// `max(max_point_gap, ρ · sin Δφ / sin(min_incidence − Δφ) + 3 range_sigma)` (the
-    /// adaptive breakpoint rule, `ρ` the nearer range); each run split at the point farthest from its chord while that
-    /// distance exceeds `split_distance` (the split point moved to where the points change
-    /// sides once both pieces are straight); pieces with fewer than `min_points` points or
-    /// a chord shorter than `min_length` dropped; a weighted fit per piece (Pfister et al.,
-    /// covariance = inverse Fisher information), with end points beyond 3σ trimmed;
+    /// adaptive breakpoint rule, `ρ` the nearer range); the scan's range noise measured
+    /// from its runs (see [`measured_range_sigma`](Self::measured_range_sigma)), and
+    /// `σ_ρ = max(range_sigma, measured)` used from here on; each run split at the point
+    /// farthest from its chord while that distance exceeds
+    /// `max(split_distance, `[`SPLIT_SIGMAS`]` σ_ρ)` (the split point moved to where the
+    /// points change sides once both pieces are straight); pieces with fewer than
+    /// `min_points` points or a chord shorter than `min_length` dropped; a weighted fit
+    /// per piece (Pfister et al., covariance = inverse Fisher information, with `σ_ρ`),
+    /// with end points beyond 3σ trimmed;
     /// neighbours merged and refitted when
     /// `(Δr, Δψ)ᵀ(Σ_a + Σ_b)⁻¹(Δr, Δψ) ≤ χ²₂⁻¹(merge_probability)` and their gap passes
     /// the same breakpoint rule; lines shorter than `min_length` dropped. End points are the
@@ -94,11 +123,17 @@ impl LineExtractor {
         );
         collect(scan, &self.beams, &breakpoint, &mut self.scan);
         let points = self.scan.points(&self.beams);
+        self.measured_range_sigma = range_noise(&points, &self.scan.runs, &mut self.noise_samples);
+        let range_sigma = self
+            .measured_range_sigma
+            .map_or(self.params.range_sigma, |s| s.max(self.params.range_sigma));
+        self.merge_rule.noise.range_var = range_sigma * range_sigma;
+        self.split_distance = self.params.split_distance.max(SPLIT_SIGMAS * range_sigma);
         self.segments.clear();
         split_runs(
             &self.scan,
             &points,
-            self.params.split_distance,
+            self.split_distance,
             self.params.min_points,
             &mut self.stack,
             &mut self.segments,
@@ -145,7 +180,7 @@ impl LineExtractor {
             let straight = xs
                 .iter()
                 .zip(ys)
-                .all(|(&x, &y)| libm::fabs(x * c + y * s - fit.r) <= self.params.split_distance);
+                .all(|(&x, &y)| libm::fabs(x * c + y * s - fit.r) <= self.split_distance);
             if !straight {
                 return None;
             }

@@ -17,6 +17,7 @@ mod merge;
 mod moments;
 mod params;
 mod points;
+mod range_noise;
 mod split;
 
 pub use error::ExtractionError;

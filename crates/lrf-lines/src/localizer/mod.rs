@@ -27,8 +27,8 @@ use crate::{
 use alloc::vec::Vec;
 use core::ops::Range;
 use ekf_core::{
-    angle_diff, ChiSquareGate, Compass, Considered, Ekf, LaserLine, Measurement, Motion, Pose2,
-    Position, UpdateOutcome, WheelSpeeds,
+    angle_diff, ChiSquareGate, Compass, Considered, Ekf, LaserLine, Measurement, Motion,
+    OdometryTravel, Pose2, Position, UpdateOutcome, WheelSpeeds,
 };
 use nalgebra::{Matrix2, Matrix3, Vector3};
 
@@ -211,6 +211,9 @@ pub struct Localizer {
     /// filter's initial error, so it cannot judge the filter's heading against the compass.
     map_from_first_scan: bool,
     extractor: LineExtractor,
+    /// Odometry travelled since the last scan: the interval of the odometry noise
+    /// ([`OdometryTravel`]).
+    travel: OdometryTravel<f64>,
     matcher: Matcher,
     compass_gate: ChiSquareGate<f64>,
     compass_lockout: CompassLockout,
@@ -275,6 +278,7 @@ impl Localizer {
                 },
             )?,
             compass_refuted: false,
+            travel: OdometryTravel::default(),
             lines: Vec::new(),
             matches: MatchResult::new(),
             fusions: Vec::new(),
@@ -322,10 +326,15 @@ impl Localizer {
         self.predict(|ekf| ekf.predict_wheels(&robot, speeds, &noise))
     }
 
-    /// Prediction from an odometry delta `(Δs, Δθ)` with the configured odometry noise.
+    /// Prediction from an odometry delta `(Δs, Δθ)` with the configured odometry noise,
+    /// applied over the interval since the last scan ([`OdometryTravel`]: the noise of a
+    /// scan interval does not depend on how many odometry messages it took).
     pub fn predict_odometry(&mut self, motion: &Motion<f64>) -> Result<(), LocalizerError> {
         let noise = self.config.odometry_noise;
-        self.predict(|ekf| ekf.predict_odometry(motion, &noise))
+        let mut travel = self.travel;
+        self.predict(|ekf| ekf.predict_odometry_in(motion, &noise, &mut travel))?;
+        self.travel = travel;
+        Ok(())
     }
 
     /// Runs a prediction that returns its transition Jacobian `A`, and tells the map's
@@ -590,6 +599,7 @@ impl Localizer {
         clock: &mut impl StageClock,
     ) -> Result<ScanReport, LocalizerError> {
         clock.scan_started();
+        self.travel.reset();
         self.fusions.clear();
         let extracted = self.extractor.extract(scan, &mut self.lines);
         clock.stage_done(ScanStage::Extraction);
@@ -632,6 +642,7 @@ impl Localizer {
         for line in lines {
             line.validate().map_err(LocalizerError::Filter)?;
         }
+        self.travel.reset();
         self.fusions.clear();
         self.lines.clear();
         self.lines.extend_from_slice(lines);
@@ -949,7 +960,14 @@ impl Localizer {
     ) -> Result<(), LocalizerError> {
         self.ekf = Ekf::new(pose, covariance).map_err(LocalizerError::Filter)?;
         self.compass_lockout = CompassLockout::default();
+        self.travel.reset();
         Ok(())
+    }
+
+    /// The odometry travelled since the last scan, over which the next odometry step's
+    /// noise is taken.
+    pub fn travel(&self) -> OdometryTravel<f64> {
+        self.travel
     }
 
     /// The pose estimate `(x, y, θ)`.
