@@ -4,7 +4,7 @@
 //! the odometry cannot have driven, is refused and the laser decides where the robot is
 //! (measured: no scan over 1 m wherever the jump is put); in the blackout it finds itself
 //! again by a relocalization, with a large error until the search is unambiguous:
-//! measured 70 scans over 1 m (15.9 %); the bound below is that, rounded up, so a slower
+//! measured 12 scans over 1 m (2.7 %); the bound below is that, rounded up, so a slower
 //! recovery fails here (docs/RESULTS.md).
 
 mod import_common;
@@ -160,5 +160,5 @@ fn a_thirty_second_odometry_blackout_is_bridged_by_the_laser() {
     let outcome = run(&lines, dir.path());
     let t = &outcome.summary.tracking;
     assert!(t.motion_gaps >= 1, "{t:?}");
-    assert_regained(&outcome, "30 s blackout", 0.17);
+    assert_regained(&outcome, "30 s blackout", 0.03);
 }
