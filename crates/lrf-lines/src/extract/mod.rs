@@ -21,5 +21,5 @@ mod range_noise;
 mod split;
 
 pub use error::ExtractionError;
-pub use extractor::LineExtractor;
+pub use extractor::{LineExtractor, SPLIT_SIGMAS};
 pub use params::ExtractionParams;
