@@ -123,7 +123,8 @@ pub struct Tracking {
     pub enabled: bool,
     /// A motion message came since the last scan.
     pub motion_since_scan: bool,
-    /// The odometry jumped since the last scan (a step faster than the robot drives).
+    /// The odometry jumped since the last scan (a step refused as a jump, see
+    /// [`crate::wheels::JUMP_FACTOR`]).
     pub motion_jumped: bool,
     /// The motion source has spoken at all.
     pub motion_seen: bool,

@@ -11,14 +11,17 @@ use serde::{Deserialize, Serialize};
 #[serde(default, deny_unknown_fields)]
 pub struct ExtractionParams {
     /// Range noise σ_ρ of one reading (m). Default 0.01: the LMS 2xx's statistical error
-    /// is 5–10 mm indoors, and its output is quantised to 1 cm in cm mode.
+    /// is 5–10 mm indoors, and its output is quantised to 1 cm in cm mode. A floor: a
+    /// scan whose points scatter more is extracted with the noise it shows
+    /// ([`LineExtractor::measured_range_sigma`](super::LineExtractor::measured_range_sigma)).
     pub range_sigma: f64,
     /// Bearing noise σ_φ of one beam (rad). Default 0.001 (≈ 0.06°): a small fraction
     /// of the 0.25° angular resolution, the beam-direction jitter of the mirror.
     pub bearing_sigma: f64,
     /// A segment is split at the point farthest from the chord through its end points
     /// when that distance exceeds this (m). Default 0.05 (5 σ_ρ, so noise alone rarely
-    /// splits a wall, while a 5 cm step does).
+    /// splits a wall, while a 5 cm step does). A scan noisier than `range_sigma` is split
+    /// at [`SPLIT_SIGMAS`](super::SPLIT_SIGMAS) of its measured σ_ρ when that is more.
     pub split_distance: f64,
     /// Consecutive valid points at most this far apart always belong to one segment, and
     /// two collinear lines separated by at most this may merge (m). Default 0.3: doorways
