@@ -211,8 +211,8 @@ pub struct Localizer {
     /// filter's initial error, so it cannot judge the filter's heading against the compass.
     map_from_first_scan: bool,
     extractor: LineExtractor,
-    /// Odometry travelled since the last scan: the interval of the odometry noise
-    /// ([`OdometryTravel`]).
+    /// Odometry travelled since the last measurement (scan, compass heading or position
+    /// fix): the interval of the odometry noise ([`OdometryTravel`]).
     travel: OdometryTravel<f64>,
     matcher: Matcher,
     compass_gate: ChiSquareGate<f64>,
@@ -327,8 +327,11 @@ impl Localizer {
     }
 
     /// Prediction from an odometry delta `(Δs, Δθ)` with the configured odometry noise,
-    /// applied over the interval since the last scan ([`OdometryTravel`]: the noise of a
-    /// scan interval does not depend on how many odometry messages it took).
+    /// applied over the interval since the last measurement, a scan, compass heading or
+    /// position fix ([`OdometryTravel`]: the noise of an interval does not depend on how
+    /// many odometry messages it took). With no measurement at all (dead reckoning) the
+    /// interval is the whole run, and the proportional terms grow with the distance
+    /// itself, as a systematic error does.
     pub fn predict_odometry(&mut self, motion: &Motion<f64>) -> Result<(), LocalizerError> {
         let noise = self.config.odometry_noise;
         let mut travel = self.travel;
@@ -379,6 +382,7 @@ impl Localizer {
         variance: f64,
     ) -> Result<CompassUpdate, LocalizerError> {
         let compass = Compass::new(heading, variance).map_err(LocalizerError::Filter)?;
+        self.travel.reset();
         if !self
             .compass_follow
             .follows(heading, variance, self.follow_threshold)
@@ -537,6 +541,7 @@ impl Localizer {
         gate: Option<&ChiSquareGate<f64>>,
     ) -> Result<UpdateOutcome<f64>, LocalizerError> {
         let position = Position::new(x, y, covariance).map_err(LocalizerError::Filter)?;
+        self.travel.reset();
         self.update_state(&position, gate)
     }
 
@@ -964,8 +969,8 @@ impl Localizer {
         Ok(())
     }
 
-    /// The odometry travelled since the last scan, over which the next odometry step's
-    /// noise is taken.
+    /// The odometry travelled since the last measurement, over which the next odometry
+    /// step's noise is taken.
     pub fn travel(&self) -> OdometryTravel<f64> {
         self.travel
     }
