@@ -206,7 +206,7 @@ impl OdometryTracker {
         if jump {
             return Err(Skip::Implausible {
                 field: "odometry step",
-                expected: "at most 10 times the RMS of the steps before it, or 0.5 m (m)",
+                expected: "at most 10 times the RMS of the steps before it or 0.5 m, whichever is more (m)",
                 found: length,
             });
         }
