@@ -219,19 +219,14 @@ impl<T: Real> Ekf<T> {
     }
 
     /// Prediction from an odometry delta `(Δs, Δθ)` with the distance/rotation noise
-    /// model. Returns `A` (see [`Ekf::predict`]).
+    /// model, the step its own noise interval (the noise is
+    /// [`OdometryNoise::motion_covariance`]). Returns `A` (see [`Ekf::predict`]).
     pub fn predict_odometry(
         &mut self,
         motion: &Motion<T>,
         noise: &OdometryNoise<T>,
     ) -> Result<Matrix3<T>, Error> {
-        finite(motion.ds, "motion ds")?;
-        finite(motion.dtheta, "motion dtheta")?;
-        noise.validated()?;
-        // diag(σ_s², σ_e², σ_θ²) is positive semi-definite by construction.
-        let sigma = noise.motion_covariance(motion);
-        all_finite(sigma.as_slice(), "motion noise")?;
-        Ok(self.propagate(motion, &sigma))
+        self.predict_odometry_in(motion, noise, &mut OdometryTravel::default())
     }
 
     /// Prediction from an odometry delta `(Δs, Δθ)` taken after `travel` within the

@@ -191,7 +191,7 @@ impl<T: Real> OdometryNoise<T> {
 /// would make the filter over-confident and 1 Hz odometry under-confident. Accumulated
 /// over the interval between two corrections instead (as AMCL applies its model once per
 /// filter update), the noise depends on the motion only.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct OdometryTravel<T> {
     /// Distance travelled `Σ|Δs|` (m).
     pub distance: T,
@@ -199,13 +199,20 @@ pub struct OdometryTravel<T> {
     pub turn: T,
 }
 
+impl<T: Real> Default for OdometryTravel<T> {
+    /// Nothing travelled: the start of an interval.
+    fn default() -> Self {
+        Self {
+            distance: T::zero(),
+            turn: T::zero(),
+        }
+    }
+}
+
 impl<T: Real> OdometryTravel<T> {
     /// Starts a new interval (after a correction).
     pub fn reset(&mut self) {
-        *self = Self {
-            distance: T::zero(),
-            turn: T::zero(),
-        };
+        *self = Self::default();
     }
 
     /// The model's standard deviations for the whole travel so far.

@@ -8,7 +8,7 @@ use crate::counts::FusionCounts;
 use crate::motion::{MotionClock, MotionStep};
 use crate::tracking::{self, Tracking};
 use crate::verification::{self, Verification, Verified};
-use crate::wheels::{Contradiction, OdometryTracker, WheelTracker};
+use crate::wheels::{Contradiction, OdometryTracker, WheelTracker, JUMP_FIELD};
 use crate::{FusionError, Input, Scan, Skip};
 use alloc::vec::Vec;
 use ekf_core::{ChiSquareGate, Pose2, UpdateOutcome};
@@ -290,11 +290,7 @@ impl Fuser {
         let (step, t0, t1, contradiction) = match step {
             Ok(step) => step,
             Err(skip) => {
-                if let Skip::Implausible {
-                    field: "odometry step",
-                    ..
-                } = skip
-                {
+                if matches!(skip, Skip::Implausible { field, .. } if field == JUMP_FIELD) {
                     // Where the robot went is unknown: the laser decides at the next scan.
                     self.tracking.motion_jumped = true;
                 }

@@ -159,6 +159,9 @@ pub const JUMP_MIN_M: f64 = 0.5;
 /// Moving steps the RMS runs over (and the fewest before the jump test applies).
 pub const JUMP_HISTORY: u32 = 10;
 
+/// The field a jump is refused under ([`Skip::Implausible`]).
+pub const JUMP_FIELD: &str = "odometry step";
+
 /// Motion steps from consecutive odometry poses.
 #[derive(Debug, Clone, Default)]
 pub struct OdometryTracker {
@@ -205,7 +208,7 @@ impl OdometryTracker {
         self.moving = self.moving.saturating_add(1);
         if jump {
             return Err(Skip::Implausible {
-                field: "odometry step",
+                field: JUMP_FIELD,
                 expected: "at most 10 times the RMS of the steps before it or 0.5 m, whichever is more (m)",
                 found: length,
             });
