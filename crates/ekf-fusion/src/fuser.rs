@@ -475,6 +475,7 @@ impl Fuser {
         } else if !gap && !self.tracking.unlocked && self.fused_lines_fix_position(&params) {
             // Regained by tracking alone.
             self.tracking.lost_for = 0;
+            self.tracking.since_fix = 0;
             self.tracking.verification = None;
             if core::mem::replace(&mut self.tracking.declared, false) {
                 let counts = &self.counts.tracking;
@@ -491,20 +492,20 @@ impl Fuser {
             if pending.add_scan(&self.localizer, &params).is_err() {
                 // A candidate the scan cannot restart (a non-finite pose): refused.
                 self.counts.tracking.refused += 1;
-                self.tracking.lost_for += 1;
+                self.tracking.still_lost();
                 return Ok(());
             }
             if !pending.done() {
                 self.tracking.verification = Some(pending);
-                self.tracking.lost_for += 1;
+                self.tracking.still_lost();
                 return Ok(());
             }
             let Some(won) = pending.verdict(&params) else {
                 self.counts.tracking.refused += 1;
-                self.tracking.lost_for += 1;
+                self.tracking.still_lost();
                 return Ok(());
             };
-            return self.restart_at(scan, now, won, &params, fused);
+            return self.restart_at(scan, now, won, &params, fused, true);
         }
         let pose = self.localizer.pose();
         let cov = self.localizer.covariance();
@@ -522,12 +523,12 @@ impl Fuser {
                 }
                 None => self.counts.tracking.refused += 1,
             }
-            self.tracking.lost_for += 1;
+            self.tracking.still_lost();
             return Ok(());
         }
         let Some(found) = found.filter(|r| r.is_unambiguous(&params)) else {
             self.counts.tracking.refused += 1;
-            self.tracking.lost_for += 1;
+            self.tracking.still_lost();
             return Ok(());
         };
         let won = Verified {
@@ -537,12 +538,19 @@ impl Fuser {
             score: found.best.score,
             runner_up: found.runner_up,
         };
-        self.restart_at(scan, now, won, &params, fused)
+        // After a motion gap one scan placed the robot and nothing checks it yet.
+        self.restart_at(scan, now, won, &params, fused, !gap)
     }
 
     /// Restarts the filter at the pose a search found (`won`) unless the estimate is
     /// already there, and fuses the scan again: kept if at least
     /// [`tracking::MIN_VERIFIED_LINES`] lines fuse, otherwise the filter is put back.
+    ///
+    /// A `confirmed` pose (verified over several scans, or a check of an estimate the
+    /// filter still trusted) ends the loss. One scan's answer after a motion gap does
+    /// not: the filter restarts there but stays lost until a scan tracked from it by the
+    /// motion model fixes the position ([`tracking::fix_position`]); a search that puts
+    /// the robot where the estimate already was confirms it.
     fn restart_at(
         &mut self,
         scan: &Scan,
@@ -550,6 +558,7 @@ impl Fuser {
         won: Verified,
         params: &RelocalizeParams,
         fused: &mut ScanFused,
+        confirmed: bool,
     ) -> Result<(), FusionError> {
         let best = won.pose;
         if !params.elsewhere(&best, &self.localizer.pose()) {
@@ -570,14 +579,18 @@ impl Fuser {
                 if counts.first_relocalizations_ns.len() < 10 {
                     counts.first_relocalizations_ns.push(now);
                 }
-                self.tracking.locked(counts);
+                if confirmed {
+                    self.tracking.locked(counts);
+                } else {
+                    self.tracking.unconfirmed();
+                }
                 fused.report = r;
                 fused.relocalized = Some(won);
             }
             None => {
                 self.localizer = saved;
                 counts.refused += 1;
-                self.tracking.lost_for += 1;
+                self.tracking.still_lost();
             }
         }
         Ok(())

@@ -791,7 +791,13 @@ fn write_scan_outputs(
             now,
             "ekf/relocalization",
             1,
-            "relocalized: the filter restarted at the pose the map search found",
+            if fused.lost_after {
+                "relocalized, unconfirmed: the filter restarted at the pose the map search \
+                 found in this scan alone (after a motion gap); still lost until a scan \
+                 tracked from it fixes the position"
+            } else {
+                "relocalized: the filter restarted at the pose the map search found"
+            },
             vec![
                 ("x", format!("{:.3}", best.x)),
                 ("y", format!("{:.3}", best.y)),
