@@ -70,6 +70,8 @@ pub enum Fused {
 pub struct ScanFused {
     /// The update that stands (after a relocalization, the one at the new pose).
     pub report: ScanReport,
+    /// The pose predicted to the scan's time, before its lines were fused.
+    pub predicted: Option<Pose2<f64>>,
     /// A loss began at this scan.
     pub lost: Option<TrackingChange>,
     /// Tracking again by the scan's own lines after a declared loss.
@@ -398,6 +400,7 @@ impl Fuser {
             return Ok(duplicate);
         }
         self.catch_up(stamp_ns)?;
+        let predicted = self.localizer.pose();
         let report = match self.localizer.update_scan_timed(&scan.as_scan(), clock) {
             Ok(r) => r,
             Err(LocalizerError::Extraction(e)) => return Ok(Fused::ScanRefused(e)),
@@ -406,6 +409,7 @@ impl Fuser {
         let gap = self.tracking.gap_before_scan(stamp_ns);
         let mut fused = ScanFused {
             report,
+            predicted: Some(predicted),
             ..ScanFused::default()
         };
         self.check_tracking(scan, stamp_ns, gap, &mut fused)?;

@@ -10,10 +10,10 @@ use super::key_scans::{KeyScan, KeyScans};
 use super::loop_closure::{LoopClosures, Outcome};
 use super::pose_graph::{relative, Edge, PoseGraph};
 use super::rematch::rematch;
-use super::scan_match::{align, ReferenceCloud, ScanPoints};
+use super::scan_match::{align, Alignment, ReferenceCloud, ScanPoints};
 use super::SlamParams;
 use crate::replay::{ReplayError, ScanHook};
-use ekf_core::Pose2;
+use ekf_core::{angle_diff, Pose2};
 use ekf_fusion::{Fuser, Scan, ScanFused};
 use lrf_lines::{LineMap, LocalizerConfig};
 use nalgebra::{Matrix3, Vector3};
@@ -21,6 +21,11 @@ use nalgebra::{Matrix3, Vector3};
 /// A closure whose edges cost more than `χ²(this, 3 per edge)` at the graph's poses is
 /// a surprise: the graph is optimised and the filter restarted at once.
 const SURPRISE_PROBABILITY: f64 = 0.99;
+
+/// Starts closer than this (m, rad) converge to the same alignment: a second is not tried.
+const SAME_START_M: f64 = 0.01;
+/// See [`SAME_START_M`].
+const SAME_START_RAD: f64 = 0.5 * core::f64::consts::PI / 180.0;
 
 /// A scan's pose as the front end had it, and the key scan it follows.
 #[derive(Debug, Clone, Copy)]
@@ -160,6 +165,30 @@ impl FrontEnd {
         )
     }
 
+    /// The scan's points aligned to the local map's ([`align`]) from the filter's pose,
+    /// or, when too few points match there and the scan's lines moved the filter by more
+    /// than [`SAME_START_M`] or [`SAME_START_RAD`], from the pose predicted before them:
+    /// at a turn, where the odometry leaves the heading loose, a few lines can pull the
+    /// filter onto walls turned by ten degrees or more, out of the matcher's reach
+    /// (edmonton's front end lost 14° so at one turn, and its map never recovered).
+    fn align_from(
+        &self,
+        points: &ScanPoints,
+        fused: Pose2<f64>,
+        predicted: Option<Pose2<f64>>,
+    ) -> Option<Alignment> {
+        let params = &self.params.scan_match;
+        let elsewhere = |p: &Pose2<f64>| {
+            (p.x - fused.x).hypot(p.y - fused.y) > SAME_START_M
+                || angle_diff(p.theta, fused.theta).abs() > SAME_START_RAD
+        };
+        align(&self.cloud, points, fused, params).or_else(|| {
+            predicted
+                .filter(elsewhere)
+                .and_then(|p| align(&self.cloud, points, p, params))
+        })
+    }
+
     /// The edge from the previous key scan: the filter's relative pose, with the
     /// front end's error model (`σ_xy = odometry_sigma_xy + odometry_sigma_xy_per_m · d`,
     /// `σ_θ = odometry_sigma_theta + odometry_sigma_theta_per_rad · |Δθ|`).
@@ -186,7 +215,7 @@ impl ScanHook for FrontEnd {
     fn scan_fused(
         &mut self,
         now: u64,
-        _fused: &ScanFused,
+        fused: &ScanFused,
         scan: &Scan,
         fuser: &mut Fuser,
     ) -> Result<bool, ReplayError> {
@@ -204,7 +233,7 @@ impl ScanHook for FrontEnd {
             .then(|| ScanPoints::from_scan(scan, &self.mount));
         let aligned = points
             .as_ref()
-            .and_then(|points| align(&self.cloud, points, pose, &self.params.scan_match));
+            .and_then(|points| self.align_from(points, pose, fused.predicted));
         if let Some(aligned) = aligned {
             let covariance = *fuser.localizer().covariance();
             fuser
