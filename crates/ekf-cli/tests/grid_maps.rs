@@ -73,12 +73,13 @@ fn the_aces_map_drawn_as_a_grid_and_read_back_localizes_within_2_cm_of_it() {
     );
 }
 
-/// The maps issue asks for 0.03 m here; this grid gives 0.121 m against 0.075 m (other
-/// lattice spacings give 0.094–0.139 m with the same share of walls matched, so the gap is
-/// the tracking's sensitivity to small map differences, not a worse map). The bound
-/// guards what holds today: tracked throughout, within 0.07 m.
+/// The maps issue asks for 0.03 m here. With the import's defaults this grid gives
+/// 0.1020 m against 0.0724 m with the line map (0.0296 apart); other lattice spacings
+/// and sighting counts give 0.095–0.24 m (docs/maps.md): the tracking is sensitive to
+/// small differences in the walls, so a change elsewhere can move this by more than the
+/// margin. Deterministic on one machine: same log, same code, same number.
 #[test]
-fn a_grid_mapped_from_the_aces_scans_localizes_within_7_cm_of_the_line_map() {
+fn a_grid_mapped_from_the_aces_scans_localizes_within_3_cm_of_the_line_map() {
     let dir = tempfile::tempdir().unwrap();
     let yaml =
         grid_support::gmapping_style_grid(&testdata("aces.mcap"), 0.05, dir.path(), "aces-slam");
@@ -89,7 +90,7 @@ fn a_grid_mapped_from_the_aces_scans_localizes_within_7_cm_of_the_line_map() {
     );
     let (json, grid) = (rmse_with(&testdata("aces-map.json")), rmse_with(&walls));
     assert!(
-        grid - json <= 0.07,
+        grid - json <= 0.03,
         "RMSE {grid:.4} m with the grid's walls, {json:.4} m with the line map"
     );
 }
