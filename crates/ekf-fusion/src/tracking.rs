@@ -101,7 +101,7 @@ pub struct TrackingCounts {
     /// Of those, motion gaps.
     pub motion_gaps: u64,
     /// Relocalizations that moved the filter (after a loss, or a check while the heading
-    /// was uncertain).
+    /// was uncertain), confirmed or not.
     pub relocalizations: u64,
     /// Searches run.
     pub searches: u64,
@@ -109,7 +109,9 @@ pub struct TrackingCounts {
     pub refused: u64,
     /// Scans that ended with the filter lost (from a loss until it was regained) or
     /// unconfirmed (a check's search refused while the heading was uncertain, until lines
-    /// fused again): their poses are the filter's guess, not a tracked estimate.
+    /// fused again; or restarted at one scan's answer after a motion gap, until a scan
+    /// tracked from it fixed the position): their poses are the filter's guess, not a
+    /// tracked estimate.
     pub scans_lost: u64,
     /// Scans the filter had been lost for when the log ended (0: tracking).
     pub lost_at_end: u32,
