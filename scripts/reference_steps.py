@@ -11,10 +11,17 @@ reference's, the start that matches more points kept). The step is then
 - `laser=ref`: the other way round — the odometry slipped;
 - `unclear`: fewer than half the points matched, or neither fits.
 
-With an estimate (TUM, as `ekf replay --tum` or `ekf corpus` write it), it also scores
-it as `ekf corpus` does (the last estimate at or before each reference pose) over all
-reference poses and without the ones from each `laser=odom` step until the error is
-back under 0.2 m.
+The laser's step is turned into the robot's with the laser's mount from `/tf_static`
+(`base_link` to the scan's frame; none: the laser at the robot's origin). A step is only
+judged when both starts converge to the same alignment (within 0.15 m) or one matches
+clearly more points (a tenth of the scan): where the points constrain little, each start
+stays near where it began, and the better of two near-equal fits says nothing.
+
+With an estimate (TUM, as `ekf replay --tum` or `ekf corpus` write it), it also gives the
+position RMSE as `ekf replay` computes it (as `evo_ape` without alignment: each pose of
+the trajectory with fewer poses paired with the nearest of the other within 10 ms), over
+all pairs and without those from each `laser=odom` step until the error is back under
+0.2 m.
 
 Usage (the packages of tests/python/requirements.txt):
 
@@ -36,6 +43,10 @@ INLIER_M = 0.15
 AGREE_M = 0.15
 DISAGREE_M = 0.3
 MIN_INLIER_SHARE = 0.5
+# A start's alignment wins over the other's by at least this share of the scan's points.
+CLEAR_MARGIN = 0.1
+# Pairs of poses further apart in time are not compared (evo's max_diff, ekf replay's).
+MAX_DIFF_NS = 10_000_000
 
 
 @dataclass
@@ -47,8 +58,9 @@ class Step:
     inliers: float
 
 
-def stamp(header) -> float:
-    return header.stamp.sec + header.stamp.nanosec * 1e-9
+def stamp(header) -> int:
+    """The header's stamp in integer nanoseconds."""
+    return header.stamp.sec * 1_000_000_000 + header.stamp.nanosec
 
 
 def yaw(q) -> float:
@@ -107,66 +119,128 @@ def classify(odom: np.ndarray, ref: np.ndarray, laser: np.ndarray, inliers: floa
 
 
 def read_log(path):
-    scans, odom, ref = [], [], []
-    for m in read_ros2_messages(path, topics=["/scan", "/odom", "/ground_truth"]):
+    """The scans (stamp, points in the laser frame, frame id), odometry and reference
+    poses (stamp, (x, y, θ)) and the laser mounts by frame id from `/tf_static`."""
+    scans, odom, ref, mounts = [], [], [], {}
+    topics = ["/scan", "/odom", "/ground_truth", "/tf_static"]
+    for m in read_ros2_messages(path, topics=topics):
         msg, topic = m.ros_msg, m.channel.topic
         if topic == "/scan":
             r = np.asarray(msg.ranges, dtype=float)
             a = msg.angle_min + msg.angle_increment * np.arange(len(r))
             ok = np.isfinite(r) & (r > msg.range_min) & (r < msg.range_max)
-            scans.append((stamp(msg.header), np.c_[r[ok] * np.cos(a[ok]), r[ok] * np.sin(a[ok])]))
+            points = np.c_[r[ok] * np.cos(a[ok]), r[ok] * np.sin(a[ok])]
+            scans.append((stamp(msg.header), points, msg.header.frame_id))
+        elif topic == "/tf_static":
+            for tf in msg.transforms:
+                t = tf.transform.translation
+                mounts[tf.child_frame_id] = (t.x, t.y, yaw(tf.transform.rotation))
         else:
             p = msg.pose.pose
             pose = (p.position.x, p.position.y, yaw(p.orientation))
             (odom if topic == "/odom" else ref).append((stamp(msg.header), pose))
-    return scans, odom, ref
+    return scans, odom, ref, mounts
+
+
+def compose(a, b) -> np.ndarray:
+    """a ⊕ b."""
+    c, s = math.cos(a[2]), math.sin(a[2])
+    th = (a[2] + b[2] + math.pi) % (2 * math.pi) - math.pi
+    return np.array([a[0] + c * b[0] - s * b[1], a[1] + s * b[0] + c * b[1], th])
+
+
+def inverse(a) -> np.ndarray:
+    c, s = math.cos(a[2]), math.sin(a[2])
+    return np.array([-c * a[0] - s * a[1], s * a[0] - c * a[1], -a[2]])
+
+
+def robot_step(sensor_step, mount) -> np.ndarray:
+    """The robot's step for the laser's step `sensor_step`, the laser at `mount`."""
+    return compose(compose(mount, sensor_step), inverse(mount))
 
 
 def pose_at(series, times, t):
-    """The last pose of `series` at or before `t`."""
-    return series[max(bisect.bisect_right(times, t + 1e-9) - 1, 0)][1]
+    """The last pose of `series` at or before `t` (ns)."""
+    return series[max(bisect.bisect_right(times, t) - 1, 0)][1]
 
 
-def steps(scans, odom, ref, min_disagreement: float) -> list[Step]:
+def judge(a, b, odom, ref, mount) -> tuple[str, float]:
+    """Aligns scan `b` to scan `a` from the odometry's and the reference's robot steps;
+    the classification and the matched share of the alignment that decided."""
+    to_sensor = lambda step: robot_step(step, inverse(mount))  # noqa: E731
+    (xo, fo), (xr, fr) = icp(a, b, to_sensor(odom)), icp(a, b, to_sensor(ref))
+    xo, xr = robot_step(xo, mount), robot_step(xr, mount)
+    if math.hypot(*(xo[:2] - xr[:2])) < AGREE_M:
+        laser, inliers = (xo, fo) if fo >= fr else (xr, fr)
+    elif abs(fo - fr) >= CLEAR_MARGIN:
+        laser, inliers = (xo, fo) if fo > fr else (xr, fr)
+    else:
+        return "unclear", max(fo, fr)
+    return classify(odom, ref, laser, inliers), inliers
+
+
+def steps(scans, odom, ref, mounts, min_disagreement: float) -> list[Step]:
     ot, rt = [s[0] for s in odom], [s[0] for s in ref]
     out = []
-    for (t0, a), (t1, b) in zip(scans, scans[1:]):
+    for (t0, a, frame), (t1, b, _) in zip(scans, scans[1:]):
         do = relative(pose_at(odom, ot, t0), pose_at(odom, ot, t1))
         dr = relative(pose_at(ref, rt, t0), pose_at(ref, rt, t1))
         gap = math.hypot(*(do[:2] - dr[:2]))
         if gap <= min_disagreement or len(a) < 3 or len(b) < 3:
             continue
-        (xo, fo), (xr, fr) = icp(a, b, do), icp(a, b, dr)
-        laser, inliers = (xo, fo) if fo >= fr else (xr, fr)
-        out.append(Step(t0, t1, gap, classify(do, dr, laser, inliers), inliers))
+        kind, inliers = judge(a, b, do, dr, np.array(mounts.get(frame, (0.0, 0.0, 0.0))))
+        out.append(Step(t0 * 1e-9, t1 * 1e-9, gap, kind, inliers))
     return out
 
 
-def score(ref, estimate_path: str, contradicted: list[float]):
-    est = []
-    with open(estimate_path) as f:
+def read_tum(path):
+    """A TUM trajectory: (stamp ns, (x, y))."""
+    out = []
+    with open(path) as f:
         for line in f:
             if line.strip() and not line.startswith("#"):
-                v = [float(x) for x in line.split()]
-                est.append((v[0], v[1], v[2]))
-    et = [e[0] for e in est]
-    errors = []
-    for t, p in ref:
-        i = bisect.bisect_right(et, t + 1e-9) - 1
-        if i >= 0:
-            errors.append((t, math.hypot(est[i][1] - p[0], est[i][2] - p[1])))
+                v = line.split()
+                out.append((round(float(v[0]) * 1e9), (float(v[1]), float(v[2]))))
+    return out
+
+
+def pair_errors(estimate, reference):
+    """Position errors (reference stamp ns, m) as `ekf replay` pairs poses: each pose of
+    the trajectory with fewer poses with the nearest of the other within MAX_DIFF_NS
+    (ties: the earlier)."""
+    est_queries = len(estimate) < len(reference)
+    queries, candidates = (estimate, reference) if est_queries else (reference, estimate)
+    times = [c[0] for c in candidates]
+    out = []
+    for t, q in queries:
+        i = bisect.bisect_left(times, t)
+        near = [j for j in (i - 1, i) if 0 <= j < len(times)]
+        if not near:
+            continue
+        j = min(near, key=lambda j: (abs(times[j] - t), j))
+        if abs(times[j] - t) > MAX_DIFF_NS:
+            continue
+        c = candidates[j][1]
+        out.append((times[j] if est_queries else t, math.hypot(q[0] - c[0], q[1] - c[1])))
+    return sorted(out)
+
+
+def score(errors, contradicted_ns):
+    """RMSE over all `errors` (stamp ns, m), and without those from each stamp of
+    `contradicted_ns` until the error is back under 0.2 m: (n, rmse, left out, rmse)."""
     left_out = set()
-    for t1 in contradicted:
+    for t1 in contradicted_ns:
         for i, (t, e) in enumerate(errors):
-            if t < t1 - 1e-9:
+            if t < t1:
                 continue
             if e < 0.2:
                 break
             left_out.add(i)
     sse = sum(e * e for _, e in errors)
-    sse_out = sum(errors[i][1] ** 2 for i in left_out)
-    n, k = len(errors), len(left_out)
-    return n, math.sqrt(sse / n), k, math.sqrt((sse - sse_out) / (n - k))
+    kept = [e for i, (_, e) in enumerate(errors) if i not in left_out]
+    rmse = lambda es: math.sqrt(sum(e * e for e in es) / len(es)) if es else math.nan  # noqa: E731
+    return len(errors), (math.sqrt(sse / len(errors)) if errors else math.nan), \
+        len(left_out), rmse(kept)
 
 
 def main() -> None:
@@ -175,8 +249,8 @@ def main() -> None:
     ap.add_argument("--estimate")
     ap.add_argument("--min-disagreement", type=float, default=0.3)
     args = ap.parse_args()
-    scans, odom, ref = read_log(args.log)
-    found = steps(scans, odom, ref, args.min_disagreement)
+    scans, odom, ref, mounts = read_log(args.log)
+    found = steps(scans, odom, ref, mounts, args.min_disagreement)
     for s in found:
         print(f"{s.t0:10.1f} → {s.t1:10.1f}  odometry vs reference {s.odom_vs_ref_m:.2f} m  "
               f"{s.kind:10s}  inliers {s.inliers:.2f}")
@@ -184,10 +258,11 @@ def main() -> None:
     print(f"{len(scans) - 1} scan steps, {len(found)} where odometry and reference disagree "
           f"by more than {args.min_disagreement} m: {kinds}")
     if args.estimate:
-        n, rmse, k, rmse_rest = score(ref, args.estimate,
-                                      [s.t1 for s in found if s.kind == "laser=odom"])
-        print(f"estimate: RMSE {rmse:.3f} m over {n} reference poses; {rmse_rest:.3f} m "
-              f"without the {k} after a laser=odom step (until the error is under 0.2 m)")
+        errors = pair_errors(read_tum(args.estimate), ref)
+        contradicted = [round(s.t1 * 1e9) for s in found if s.kind == "laser=odom"]
+        n, rmse, k, rmse_rest = score(errors, contradicted)
+        print(f"estimate: RMSE {rmse:.3f} m over {n} pairs; {rmse_rest:.3f} m without the "
+              f"{k} after a laser=odom step (until the error is under 0.2 m)")
 
 
 if __name__ == "__main__":

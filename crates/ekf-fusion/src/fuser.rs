@@ -70,7 +70,8 @@ pub enum Fused {
 pub struct ScanFused {
     /// The update that stands (after a relocalization, the one at the new pose).
     pub report: ScanReport,
-    /// The pose predicted to the scan's time, before its lines were fused.
+    /// The pose predicted to the scan's time, before its lines were fused (and before
+    /// any relocalization at this scan).
     pub predicted: Option<Pose2<f64>>,
     /// A loss began at this scan.
     pub lost: Option<TrackingChange>,
@@ -462,33 +463,26 @@ impl Fuser {
         if gap {
             self.tracking.verification = None;
         }
-        if self.tracking.lost_for == 0 {
-            if gap || lost_now {
-                self.tracking.declared = true;
-                let counts = &mut self.counts.tracking;
-                counts.losses += 1;
-                counts.motion_gaps += u64::from(gap);
-                fused.lost = Some(TrackingChange {
-                    motion_gap: gap,
-                    losses: counts.losses,
-                    scans_lost: counts.scans_lost,
-                });
-            } else if !uncertain {
+        let fresh = self.tracking.lost_for == 0;
+        // A loss begins on a motion gap or unfused scans while tracking, or while
+        // unconfirmed without a declared loss (after a refused check).
+        if (fresh || !self.tracking.declared) && (gap || lost_now) {
+            self.tracking.declared = true;
+            let counts = &mut self.counts.tracking;
+            counts.losses += 1;
+            counts.motion_gaps += u64::from(gap);
+            fused.lost = Some(TrackingChange {
+                motion_gap: gap,
+                losses: counts.losses,
+                scans_lost: counts.scans_lost,
+            });
+        } else if fresh {
+            if !uncertain {
                 return Ok(());
             }
         } else if !gap && !self.tracking.unlocked && self.fused_lines_fix_position(&params) {
             // Regained by tracking alone.
-            self.tracking.lost_for = 0;
-            self.tracking.since_fix = 0;
-            self.tracking.verification = None;
-            if core::mem::replace(&mut self.tracking.declared, false) {
-                let counts = &self.counts.tracking;
-                fused.regained = Some(TrackingChange {
-                    motion_gap: false,
-                    losses: counts.losses,
-                    scans_lost: counts.scans_lost,
-                });
-            }
+            self.confirm(fused);
             return Ok(());
         }
         let verify = !gap && (lost_now || self.tracking.lost_for > 0);
@@ -566,8 +560,13 @@ impl Fuser {
     ) -> Result<(), FusionError> {
         let best = won.pose;
         if !params.elsewhere(&best, &self.localizer.pose()) {
-            // The estimate is where the search puts it.
-            self.tracking.locked(&mut self.counts.tracking);
+            // The estimate is where the search puts it: confirmed, unless both are one
+            // scan's word (an estimate that was itself a single scan's answer).
+            if confirmed || self.tracking.lost_for == 0 {
+                self.confirm(fused);
+            } else {
+                self.tracking.unconfirmed();
+            }
             return Ok(());
         }
         let saved = self.localizer.clone();
@@ -583,13 +582,13 @@ impl Fuser {
                 if counts.first_relocalizations_ns.len() < 10 {
                     counts.first_relocalizations_ns.push(now);
                 }
+                fused.report = r;
+                fused.relocalized = Some(won);
                 if confirmed {
-                    self.tracking.locked(counts);
+                    self.confirm(fused);
                 } else {
                     self.tracking.unconfirmed();
                 }
-                fused.report = r;
-                fused.relocalized = Some(won);
             }
             None => {
                 self.localizer = saved;
@@ -598,6 +597,23 @@ impl Fuser {
             }
         }
         Ok(())
+    }
+
+    /// The filter's pose is confirmed: tracking again. A declared loss that ends without
+    /// a relocalization at this scan (by tracking alone, or a search that found the
+    /// estimate where it was) is reported as regained.
+    fn confirm(&mut self, fused: &mut ScanFused) {
+        let declared = self.tracking.declared;
+        self.tracking.locked(&mut self.counts.tracking);
+        self.tracking.verification = None;
+        if declared && fused.relocalized.is_none() {
+            let counts = &self.counts.tracking;
+            fused.regained = Some(TrackingChange {
+                motion_gap: false,
+                losses: counts.losses,
+                scans_lost: counts.scans_lost,
+            });
+        }
     }
 
     /// Whether the last scan's fused lines fix the position ([`tracking::fix_position`]).

@@ -30,8 +30,9 @@
 //!
 //! The map is searched for the pose from the scan's lines alone
 //! ([`lrf_lines::relocalize()`]) within a window around the current estimate: `3σ` of its
-//! position plus 2 m, plus 2 m for every further scan spent lost; after
-//! [`GLOBAL_AFTER_SCANS`] lost scans (and from the start with `--global`), the whole map.
+//! position plus 2 m, plus 2 m for every further scan since the pose was last fixed (by
+//! tracking, or a restart, confirmed or not); after [`GLOBAL_AFTER_SCANS`] such scans (and
+//! from the start with `--global`), the whole map.
 //!
 //! While lost with odometry since the scan before, the search only nominates: its best
 //! poses are tracked over the next scans (each predicted with the motion model and looked
@@ -45,7 +46,8 @@
 //! apart with no odometry between, were put 1.5 to 20 m off this way): the filter
 //! restarts there but stays lost until a scan tracked from it by the motion model fixes
 //! the position, as a loss ends by tracking alone. A search that finds the robot where
-//! the estimate already was confirms it at once.
+//! the estimate already was confirms it at once, unless that estimate was itself one
+//! scan's answer.
 //!
 //! Either way, once the filter is restarted at the chosen pose (with the verified
 //! candidate's own covariance, or the search's resolution for a single scan's answer), the
@@ -196,10 +198,10 @@ impl Tracking {
     }
 
     /// The filter restarted at one scan's answer after a motion gap: still lost (the
-    /// loss stays declared), one scan from that fix, until a scan tracked from it
-    /// fixes the position.
+    /// loss stays declared, and this scan counts as lost) until a scan tracked from it
+    /// fixes the position; the search looks around it ([`Tracking::since_fix`] 0).
     pub fn unconfirmed(&mut self) {
-        self.lost_for = 1;
+        self.lost_for += 1;
         self.since_fix = 0;
         self.unfused = 0;
     }
@@ -364,10 +366,14 @@ mod tests {
             t.still_lost();
         }
         t.unconfirmed();
-        assert_eq!(t.lost_for, 1, "still lost");
+        assert_eq!(
+            t.lost_for,
+            GLOBAL_AFTER_SCANS + 1,
+            "still lost, and counting"
+        );
         assert!((t.window(c, 0.04).radius - 2.6).abs() < 1e-12);
         t.still_lost();
-        assert_eq!(t.lost_for, 2);
+        assert_eq!(t.lost_for, GLOBAL_AFTER_SCANS + 2);
         assert!((t.window(c, 0.04).radius - 4.6).abs() < 1e-12);
         t.locked(&mut TrackingCounts::default());
         assert_eq!((t.lost_for, t.since_fix), (0, 0));

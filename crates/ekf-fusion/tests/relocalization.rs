@@ -231,3 +231,64 @@ fn a_lost_filter_is_found_again_by_a_corner_not_by_two_parallel_walls() {
     let pose = fuser.localizer().pose();
     assert!(pose.x.abs() < 0.01 && pose.y.abs() < 0.01, "{pose:?}");
 }
+
+/// Fuses `input` at `t_ns`; a scan's outcome.
+fn scan_outcome(fuser: &mut Fuser, t_ns: u64, input: &Input) -> ekf_fusion::ScanFused {
+    match fuser.fuse(t_ns, input, &mut ()).unwrap() {
+        ekf_fusion::Fused::Scan(s) => s,
+        other => panic!("not a scan's outcome: {other:?}"),
+    }
+}
+
+#[test]
+fn after_a_motion_gap_one_scans_answer_stays_unconfirmed_until_a_tracked_scan_fixes_it() {
+    const MS: u64 = 1_000_000;
+    let config = FusionConfig {
+        mode: Mode::Laser,
+        tracking: Tracking::FromInitialPose,
+        ..FusionConfig::default()
+    };
+    let room = l_room();
+    let a = Pose2::new(1.5, 1.5, 0.0);
+    let p0 = Matrix3::from_diagonal(&Vector3::new(0.01, 0.01, 0.001));
+    let mut fuser = Fuser::new(&config, a, p0, 0, Some(map_of(&room))).unwrap();
+    // The robot's own odometry stands still throughout: it is carried, not driven.
+    let odometry = Input::OdometryPose(Pose2::new(0.0, 0.0, 0.0));
+    let mut t = 0;
+    for _ in 0..5 {
+        t += 50 * MS;
+        fuser.fuse(t, &odometry, &mut ()).unwrap();
+        t += 50 * MS;
+        let s = scan_outcome(&mut fuser, t, &scan_among(&room, &a, 20.0));
+        assert!(s.lost.is_none() && !s.lost_after, "tracking at A: {s:?}");
+    }
+    // Carried 1.5 m and turned while the odometry is silent for 2 s: a motion gap, and
+    // the search alone places the robot. One scan's word: still lost.
+    let b = Pose2::new(3.0, 1.8, 0.6);
+    t += 2000 * MS;
+    let s = scan_outcome(&mut fuser, t, &scan_among(&room, &b, 20.0));
+    assert!(s.lost.is_some_and(|l| l.motion_gap), "{s:?}");
+    assert!(s.relocalized.is_some() && s.lost_after, "{s:?}");
+    let pose = fuser.localizer().pose();
+    assert!((pose.x - b.x).hypot(pose.y - b.y) < 0.05, "{pose:?}");
+    assert_eq!(fuser.counts().tracking.relocalizations, 1);
+    // Another silent scan from the same place: the search agrees with the estimate, but
+    // that estimate was one scan's answer too. Still lost, and no new loss.
+    t += 2000 * MS;
+    let s = scan_outcome(&mut fuser, t, &scan_among(&room, &b, 20.0));
+    assert!(
+        s.lost.is_none() && s.regained.is_none() && s.lost_after,
+        "{s:?}"
+    );
+    assert_eq!(fuser.counts().tracking.losses, 1);
+    assert_eq!(fuser.lost_for(), 2);
+    // The odometry speaks again and the next scan, tracked from there, fuses the room's
+    // corner: confirmed, and the loss is reported as regained.
+    t += 50 * MS;
+    fuser.fuse(t, &odometry, &mut ()).unwrap();
+    t += 50 * MS;
+    let s = scan_outcome(&mut fuser, t, &scan_among(&room, &b, 20.0));
+    assert!(s.regained.is_some() && !s.lost_after, "{s:?}");
+    assert_eq!(fuser.lost_for(), 0);
+    assert_eq!(fuser.counts().tracking.scans_lost, 2);
+}
