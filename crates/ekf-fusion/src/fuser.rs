@@ -547,8 +547,9 @@ impl Fuser {
     /// A `confirmed` pose (verified over several scans, or a check of an estimate the
     /// filter still trusted) ends the loss. One scan's answer after a motion gap does
     /// not: the filter restarts there but stays lost until a scan tracked from it by the
-    /// motion model fixes the position ([`tracking::fix_position`]); a search that puts
-    /// the robot where the estimate already was confirms it.
+    /// motion model fixes the position ([`tracking::fix_position`]). A search that puts
+    /// the robot where the estimate already was confirms it, unless the filter was
+    /// already lost (that estimate is not a tracked one either).
     fn restart_at(
         &mut self,
         scan: &Scan,
