@@ -51,8 +51,8 @@ MAX_DIFF_NS = 10_000_000
 
 @dataclass
 class Step:
-    t0: float
-    t1: float
+    t0_ns: int
+    t1_ns: int
     odom_vs_ref_m: float
     kind: str
     inliers: float
@@ -65,14 +65,6 @@ def stamp(header) -> int:
 
 def yaw(q) -> float:
     return math.atan2(2 * (q.w * q.z + q.x * q.y), 1 - 2 * (q.y * q.y + q.z * q.z))
-
-
-def relative(a, b) -> np.ndarray:
-    """Pose b in the frame of pose a: (dx, dy, dθ)."""
-    dx, dy = b[0] - a[0], b[1] - a[1]
-    c, s = math.cos(a[2]), math.sin(a[2])
-    dth = (b[2] - a[2] + math.pi) % (2 * math.pi) - math.pi
-    return np.array([c * dx + s * dy, -s * dx + c * dy, dth])
 
 
 def transform(points: np.ndarray, x: np.ndarray) -> np.ndarray:
@@ -154,6 +146,11 @@ def inverse(a) -> np.ndarray:
     return np.array([-c * a[0] - s * a[1], s * a[0] - c * a[1], -a[2]])
 
 
+def relative(a, b) -> np.ndarray:
+    """Pose b in the frame of pose a: a⁻¹ ⊕ b."""
+    return compose(inverse(a), b)
+
+
 def robot_step(sensor_step, mount) -> np.ndarray:
     """The robot's step for the laser's step `sensor_step`, the laser at `mount`."""
     return compose(compose(mount, sensor_step), inverse(mount))
@@ -189,7 +186,7 @@ def steps(scans, odom, ref, mounts, min_disagreement: float) -> list[Step]:
         if gap <= min_disagreement or len(a) < 3 or len(b) < 3:
             continue
         kind, inliers = judge(a, b, do, dr, np.array(mounts.get(frame, (0.0, 0.0, 0.0))))
-        out.append(Step(t0 * 1e-9, t1 * 1e-9, gap, kind, inliers))
+        out.append(Step(t0, t1, gap, kind, inliers))
     return out
 
 
@@ -236,11 +233,13 @@ def score(errors, contradicted_ns):
             if e < 0.2:
                 break
             left_out.add(i)
-    sse = sum(e * e for _, e in errors)
     kept = [e for i, (_, e) in enumerate(errors) if i not in left_out]
-    rmse = lambda es: math.sqrt(sum(e * e for e in es) / len(es)) if es else math.nan  # noqa: E731
-    return len(errors), (math.sqrt(sse / len(errors)) if errors else math.nan), \
-        len(left_out), rmse(kept)
+    return len(errors), rmse([e for _, e in errors]), len(left_out), rmse(kept)
+
+
+def rmse(errors) -> float:
+    """The root mean square of `errors` (nan when there are none)."""
+    return math.sqrt(sum(e * e for e in errors) / len(errors)) if errors else math.nan
 
 
 def main() -> None:
@@ -252,14 +251,14 @@ def main() -> None:
     scans, odom, ref, mounts = read_log(args.log)
     found = steps(scans, odom, ref, mounts, args.min_disagreement)
     for s in found:
-        print(f"{s.t0:10.1f} → {s.t1:10.1f}  odometry vs reference {s.odom_vs_ref_m:.2f} m  "
+        print(f"{s.t0_ns * 1e-9:10.1f} → {s.t1_ns * 1e-9:10.1f}  odometry vs reference {s.odom_vs_ref_m:.2f} m  "
               f"{s.kind:10s}  inliers {s.inliers:.2f}")
     kinds = {k: sum(s.kind == k for s in found) for k in ("laser=odom", "laser=ref", "unclear")}
     print(f"{len(scans) - 1} scan steps, {len(found)} where odometry and reference disagree "
           f"by more than {args.min_disagreement} m: {kinds}")
     if args.estimate:
         errors = pair_errors(read_tum(args.estimate), ref)
-        contradicted = [round(s.t1 * 1e9) for s in found if s.kind == "laser=odom"]
+        contradicted = [s.t1_ns for s in found if s.kind == "laser=odom"]
         n, rmse, k, rmse_rest = score(errors, contradicted)
         print(f"estimate: RMSE {rmse:.3f} m over {n} pairs; {rmse_rest:.3f} m without the "
               f"{k} after a laser=odom step (until the error is under 0.2 m)")

@@ -168,9 +168,10 @@ impl FrontEnd {
     /// The scan's points aligned to the local map's ([`align`]) from the filter's pose,
     /// or, when that fails (too few points match, or the solve fails) and the scan's
     /// lines moved the filter by more than [`SAME_START_M`] or [`SAME_START_RAD`], from
-    /// the pose predicted before them: at a turn, where the odometry leaves the heading loose, a few lines can pull the
-    /// filter onto walls turned by ten degrees or more, out of the matcher's reach
-    /// (edmonton's front end lost 14° so at one turn, and its map never recovered).
+    /// the pose predicted before them: at a turn, where the odometry leaves the heading
+    /// loose, a few lines can pull the filter onto walls turned by ten degrees or more,
+    /// out of the matcher's reach (edmonton's front end lost 14° so at one turn, and its
+    /// map never recovered).
     fn align_from(
         &self,
         points: &ScanPoints,
