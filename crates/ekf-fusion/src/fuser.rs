@@ -31,6 +31,10 @@ enum Measured {
 }
 
 /// What fusing one input did.
+// A scan's outcome (with its predicted state) is a few hundred bytes more than the
+// others': the value is returned once per input and never stored in bulk, and boxing it
+// would allocate on every scan of an embedded loop.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone, PartialEq)]
 pub enum Fused {
     /// A motion reading: whether any of its interval was predicted through (nothing is
@@ -70,9 +74,9 @@ pub enum Fused {
 pub struct ScanFused {
     /// The update that stands (after a relocalization, the one at the new pose).
     pub report: ScanReport,
-    /// The pose predicted to the scan's time, before its lines were fused (and before
+    /// The state predicted to the scan's time, before its lines were fused (and before
     /// any relocalization at this scan).
-    pub predicted: Option<Pose2<f64>>,
+    pub predicted: Option<Predicted>,
     /// A loss began at this scan.
     pub lost: Option<TrackingChange>,
     /// Tracking again by the scan's own lines after a declared loss.
@@ -84,6 +88,15 @@ pub struct ScanFused {
     pub lost_after: bool,
     /// An over-confident stretch began ([`crate::consistency`]).
     pub over_confident: bool,
+}
+
+/// The filter's state predicted to a scan's time by the motion alone.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Predicted {
+    /// The pose.
+    pub pose: Pose2<f64>,
+    /// Its covariance.
+    pub covariance: Matrix3<f64>,
 }
 
 /// A change of the tracking state, with the counts as they were when it happened.
@@ -401,7 +414,10 @@ impl Fuser {
             return Ok(duplicate);
         }
         self.catch_up(stamp_ns)?;
-        let predicted = self.localizer.pose();
+        let predicted = Predicted {
+            pose: self.localizer.pose(),
+            covariance: *self.localizer.covariance(),
+        };
         let report = match self.localizer.update_scan_timed(&scan.as_scan(), clock) {
             Ok(r) => r,
             Err(LocalizerError::Extraction(e)) => return Ok(Fused::ScanRefused(e)),

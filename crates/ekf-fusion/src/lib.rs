@@ -33,7 +33,7 @@ pub mod wheels;
 
 pub use config::{FusionConfig, Mode, Tracking, DEFAULT_MAX_WHEEL_TURNS_PER_S};
 pub use counts::{CompassCounts, FusionCounts, GatedCounts, LineCounts};
-pub use fuser::{Forecast, Fused, Fuser, ScanFused, TrackingChange};
+pub use fuser::{Forecast, Fused, Fuser, Predicted, ScanFused, TrackingChange};
 pub use input::{Input, Scan, Skip};
 pub use reorder::{Reorder, TooLate};
 pub use timed::{Step, TimedLocalizer};

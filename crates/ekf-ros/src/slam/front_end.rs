@@ -10,11 +10,11 @@ use super::key_scans::{KeyScan, KeyScans};
 use super::loop_closure::{LoopClosures, Outcome};
 use super::pose_graph::{relative, Edge, PoseGraph};
 use super::rematch::rematch;
-use super::scan_match::{align, Alignment, ReferenceCloud, ScanPoints};
+use super::scan_match::{align, preferred, Alignment, ReferenceCloud, ScanPoints};
 use super::SlamParams;
 use crate::replay::{ReplayError, ScanHook};
 use ekf_core::{angle_diff, Pose2};
-use ekf_fusion::{Fuser, Scan, ScanFused};
+use ekf_fusion::{Fuser, Predicted, Scan, ScanFused};
 use lrf_lines::{LineMap, LocalizerConfig};
 use nalgebra::{Matrix3, Vector3};
 
@@ -26,6 +26,10 @@ const SURPRISE_PROBABILITY: f64 = 0.99;
 const SAME_START_M: f64 = 0.01;
 /// See [`SAME_START_M`].
 const SAME_START_RAD: f64 = 0.5 * core::f64::consts::PI / 180.0;
+
+/// Of two alignments of a scan, the points choose one only if McNemar's test rejects
+/// "neither fits better" at this probability ([`preferred`]).
+const PREFERENCE_PROBABILITY: f64 = 0.99;
 
 /// A scan's pose as the front end had it, and the key scan it follows.
 #[derive(Debug, Clone, Copy)]
@@ -64,6 +68,8 @@ pub struct FrontEnd {
     pub(super) aligned: u64,
     /// Whether each scan's points are aligned to the local map's (without a compass).
     align_scans: bool,
+    /// `χ²₁(PREFERENCE_PROBABILITY)`.
+    preference_bound: f64,
 }
 
 impl FrontEnd {
@@ -78,6 +84,10 @@ impl FrontEnd {
     pub fn new(params: SlamParams, localizer: LocalizerConfig, align_scans: bool) -> Self {
         Self {
             align_scans,
+            // A probability in (0, 1) and one degree of freedom always have a quantile; an
+            // infinite bound would leave every choice to the motion.
+            preference_bound: ekf_core::chi_square_quantile(PREFERENCE_PROBABILITY, 1)
+                .unwrap_or(f64::INFINITY),
             mount: localizer.laser_mount,
             keys: KeyScans::new(params.map_builder),
             graph: PoseGraph::new(),
@@ -165,29 +175,40 @@ impl FrontEnd {
         )
     }
 
-    /// The scan's points aligned to the local map's ([`align`]) from the filter's pose,
-    /// or, when that fails (too few points match, or the solve fails) and the scan's
-    /// lines moved the filter by more than [`SAME_START_M`] or [`SAME_START_RAD`], from
-    /// the pose predicted before them: at a turn, where the odometry leaves the heading
-    /// loose, a few lines can pull the filter onto walls turned by ten degrees or more,
-    /// out of the matcher's reach (edmonton's front end lost 14° so at one turn, and its
-    /// map never recovered).
+    /// The scan's points aligned to the local map's ([`align`]) from the filter's pose
+    /// and, when the scan's lines moved the filter by more than [`SAME_START_M`] or
+    /// [`SAME_START_RAD`], from the pose predicted before them; of two alignments, the
+    /// [`preferred`] one (McNemar's test at [`PREFERENCE_PROBABILITY`]). A scan's few lines can pull the filter along
+    /// a corridor (fhw: 0.7 m twice) or onto walls turned by ten degrees or more at a
+    /// turn (edmonton: 14° once, out of the matcher's reach), and the matcher, started
+    /// there, settles in a local minimum that the prediction's start avoids.
     fn align_from(
         &self,
         points: &ScanPoints,
         fused: Pose2<f64>,
-        predicted: Option<Pose2<f64>>,
+        predicted: Option<&Predicted>,
     ) -> Option<Alignment> {
         let params = &self.params.scan_match;
-        let elsewhere = |p: &Pose2<f64>| {
-            (p.x - fused.x).hypot(p.y - fused.y) > SAME_START_M
-                || angle_diff(p.theta, fused.theta).abs() > SAME_START_RAD
+        let elsewhere = |p: &&Predicted| {
+            (p.pose.x - fused.x).hypot(p.pose.y - fused.y) > SAME_START_M
+                || angle_diff(p.pose.theta, fused.theta).abs() > SAME_START_RAD
         };
-        align(&self.cloud, points, fused, params).or_else(|| {
-            predicted
-                .filter(elsewhere)
-                .and_then(|p| align(&self.cloud, points, p, params))
-        })
+        let from_fused = align(&self.cloud, points, fused, params);
+        let Some(predicted) = predicted.filter(elsewhere) else {
+            return from_fused;
+        };
+        let from_predicted = align(&self.cloud, points, predicted.pose, params);
+        let (Some(f), Some(p)) = (from_fused, from_predicted) else {
+            return from_fused.or(from_predicted);
+        };
+        Some(preferred(
+            &self.cloud,
+            points,
+            (f, p),
+            predicted,
+            params,
+            self.preference_bound,
+        ))
     }
 
     /// The edge from the previous key scan: the filter's relative pose, with the
@@ -234,7 +255,7 @@ impl ScanHook for FrontEnd {
             .then(|| ScanPoints::from_scan(scan, &self.mount));
         let aligned = points
             .as_ref()
-            .and_then(|points| self.align_from(points, pose, fused.predicted));
+            .and_then(|points| self.align_from(points, pose, fused.predicted.as_ref()));
         if let Some(aligned) = aligned {
             let covariance = *fuser.localizer().covariance();
             fuser

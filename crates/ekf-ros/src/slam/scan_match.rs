@@ -15,8 +15,9 @@
 
 use crate::slam_config::{MatchParams, REFERENCE_VOXEL};
 use ekf_core::{angle_diff, Pose2};
-use ekf_fusion::Scan;
+use ekf_fusion::{Predicted, Scan};
 use nalgebra::{Matrix2, Matrix3, SymmetricEigen, Vector2, Vector3};
+use std::cmp::Ordering;
 use std::collections::HashSet;
 
 /// Beams on each side of a point whose points fit its surface normal.
@@ -242,6 +243,72 @@ fn cell_of(p: &Vector2<f64>, cell: f64) -> (i64, i64) {
     ((p.x / cell).floor() as i64, (p.y / cell).floor() as i64)
 }
 
+/// Which of two poses of the robot, `a` and `b`, the scan's points fit better, by
+/// McNemar's test on the points that lie within the Huber threshold (`2σ`) of their
+/// nearest reference surface at one pose and not at the other: with `n_a` such points at
+/// `a` only and `n_b` at `b` only, `(n_a − n_b)² / (n_a + n_b)` is χ²₁ if neither pose fits
+/// better. [`Ordering::Greater`] (`a`) or [`Ordering::Less`] (`b`) when it exceeds
+/// `bound`; `None` when the points do not tell them apart.
+pub fn points_prefer(
+    reference: &ReferenceCloud,
+    scan: &ScanPoints,
+    (a, b): (&Pose2<f64>, &Pose2<f64>),
+    params: &MatchParams,
+    bound: f64,
+) -> Option<Ordering> {
+    let huber = 2.0 * params.sigma;
+    let fits = |w: &Vector2<f64>| {
+        reference
+            .nearest(w)
+            .is_some_and(|(q, n)| n.dot(&(w - q)).abs() <= huber)
+    };
+    let (mut only_a, mut only_b) = (0u32, 0u32);
+    for ((wa, _), (wb, _)) in scan.placed(a).zip(scan.placed(b)) {
+        match (fits(&wa), fits(&wb)) {
+            (true, false) => only_a += 1,
+            (false, true) => only_b += 1,
+            _ => {}
+        }
+    }
+    let (na, nb) = (f64::from(only_a), f64::from(only_b));
+    let statistic = match only_a + only_b {
+        0 => 0.0,
+        _ => (na - nb).powi(2) / (na + nb),
+    };
+    (statistic > bound).then(|| only_a.cmp(&only_b))
+}
+
+/// Of two alignments of `scan`, the one whose pose its points fit significantly better
+/// ([`points_prefer`] with `bound`), else the one nearer the prediction: smaller
+/// `dᵀ P⁻¹ d`, `d` the pose minus the predicted pose (heading wrapped), `P` the predicted
+/// covariance. Where the points cannot tell two alignments apart, the motion decides.
+pub fn preferred(
+    reference: &ReferenceCloud,
+    scan: &ScanPoints,
+    (a, b): (Alignment, Alignment),
+    predicted: &Predicted,
+    params: &MatchParams,
+    bound: f64,
+) -> Alignment {
+    match points_prefer(reference, scan, (&a.pose, &b.pose), params, bound) {
+        Some(Ordering::Greater) => a,
+        Some(_) => b,
+        None if mahalanobis(predicted, &b.pose) < mahalanobis(predicted, &a.pose) => b,
+        None => a,
+    }
+}
+
+/// The squared Mahalanobis distance of `pose` from the prediction (see [`preferred`]);
+/// infinite if the predicted covariance is singular.
+fn mahalanobis(predicted: &Predicted, pose: &Pose2<f64>) -> f64 {
+    let p = &predicted.pose;
+    let d = Vector3::new(pose.x - p.x, pose.y - p.y, angle_diff(pose.theta, p.theta));
+    predicted
+        .covariance
+        .try_inverse()
+        .map_or(f64::INFINITY, |information| d.dot(&(information * d)))
+}
+
 /// The outcome of [`align`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Alignment {
@@ -411,6 +478,78 @@ mod tests {
             &params
         )
         .is_none());
+    }
+
+    /// An alignment at `pose` (only the pose matters to [`preferred`]).
+    fn at(x: f64, y: f64) -> Alignment {
+        Alignment {
+            pose: Pose2::new(x, y, 0.0),
+            matched: 0,
+            information: Matrix3::zeros(),
+        }
+    }
+
+    /// A prediction at `(x, y)`, 0.1 m and 0.05 rad one σ.
+    fn predicted_at(x: f64, y: f64) -> Predicted {
+        Predicted {
+            pose: Pose2::new(x, y, 0.0),
+            covariance: Matrix3::from_diagonal(&Vector3::new(0.01, 0.01, 0.0025)),
+        }
+    }
+
+    /// `χ²₁(0.99)`.
+    const BOUND: f64 = 6.635;
+
+    #[test]
+    fn the_points_prefer_the_pose_they_were_seen_from() {
+        let room = walls(&ROOM);
+        let reference = reference(&room);
+        let scan = seen_from(&room, &Pose2::new(2.5, 2.0, 0.0));
+        let params = MatchParams::default();
+        let (truth, off) = (Pose2::new(2.5, 2.0, 0.0), Pose2::new(2.5, 2.2, 0.0));
+        let prefer = |a, b| points_prefer(&reference, &scan, (a, b), &params, BOUND);
+        assert_eq!(prefer(&truth, &off), Some(Ordering::Greater));
+        assert_eq!(prefer(&off, &truth), Some(Ordering::Less));
+        assert_eq!(prefer(&truth, &truth), None);
+        // The points decide even against a prediction next to the worse pose.
+        let chosen = preferred(
+            &reference,
+            &scan,
+            (at(2.5, 2.2), at(2.5, 2.0)),
+            &predicted_at(2.5, 2.2),
+            &params,
+            BOUND,
+        );
+        assert_eq!(chosen.pose, truth);
+    }
+
+    #[test]
+    fn where_the_points_cannot_tell_two_poses_apart_the_prediction_decides() {
+        // A 20 m corridor; the robot at x = 10 sees 10 m of it, which fit as well 0.7 m
+        // further along.
+        let corridor = [((0.0, 1.0), (20.0, 1.0)), ((20.0, -1.0), (0.0, -1.0))];
+        let reference = reference(&walls(&corridor));
+        let seen = walls(&[((5.0, 1.0), (15.0, 1.0)), ((15.0, -1.0), (5.0, -1.0))]);
+        let scan = seen_from(&seen, &Pose2::new(10.0, 0.0, 0.0));
+        let params = MatchParams::default();
+        let (here, along) = (Pose2::new(10.0, 0.0, 0.0), Pose2::new(10.7, 0.0, 0.0));
+        assert_eq!(
+            points_prefer(&reference, &scan, (&here, &along), &params, BOUND),
+            None
+        );
+        let choose = |predicted: Predicted| {
+            preferred(
+                &reference,
+                &scan,
+                (at(10.0, 0.0), at(10.7, 0.0)),
+                &predicted,
+                &params,
+                BOUND,
+            )
+            .pose
+        };
+        assert_eq!(choose(predicted_at(10.6, 0.05)), along);
+        assert_eq!(choose(predicted_at(10.1, 0.05)), here);
     }
 
     #[test]
