@@ -407,13 +407,12 @@ fn map_export_grid_command(a: MapExportGridArgs) -> Outcome {
 fn map_compare_command(a: MapCompareArgs) -> Outcome {
     let line_map = ekf_ros::replay::load_map(&a.map)?;
     let reference = ekf_ros::replay::load_map(&a.reference)?;
-    let identity = ekf_core::Pose2::new(0.0, 0.0, 0.0);
-    let alignment = if a.align {
-        map_compare::align(&line_map, &reference, &identity)
-    } else {
-        identity
+    let params = Default::default();
+    let alignment = match a.align {
+        true => ekf_ros::map_search::alignment(&line_map, &reference, &params),
+        false => ekf_core::Pose2::new(0.0, 0.0, 0.0),
     };
-    let comparison = map_compare::compare(&line_map, &reference, &alignment, &Default::default());
+    let comparison = map_compare::compare(&line_map, &reference, &alignment, &params);
     print_result(&comparison, a.json, &comparison)
 }
 

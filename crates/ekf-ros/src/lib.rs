@@ -14,6 +14,7 @@ pub mod geo;
 pub mod grid;
 pub mod map_build;
 pub mod map_compare;
+pub mod map_search;
 pub mod mcap_io;
 pub mod output_dir;
 pub mod replay;
