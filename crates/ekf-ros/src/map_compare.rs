@@ -183,7 +183,7 @@ fn pieces(s: &MapSegment, step: f64) -> impl Iterator<Item = (Point2<f64>, f64)>
 }
 
 /// `map` with every wall moved by `pose`.
-fn transformed(map: &LineMap, pose: &Pose2<f64>) -> LineMap {
+pub(crate) fn transformed(map: &LineMap, pose: &Pose2<f64>) -> LineMap {
     let segments = map
         .segments
         .iter()
@@ -201,16 +201,10 @@ fn transformed(map: &LineMap, pose: &Pose2<f64>) -> LineMap {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::test_support::map_of;
+    use crate::test_support::{map_of, ROOM};
 
     fn room() -> LineMap {
-        map_of(&[
-            [0.0, 0.0, 10.0, 0.0],
-            [10.0, 0.0, 10.0, 6.0],
-            [10.0, 6.0, 0.0, 6.0],
-            [0.0, 6.0, 0.0, 0.0],
-            [4.0, 0.0, 4.0, 2.5],
-        ])
+        map_of(&ROOM)
     }
 
     #[test]

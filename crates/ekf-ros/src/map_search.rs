@@ -194,34 +194,19 @@ fn samples_every(map: &LineMap, step: f64) -> Vec<Point2<f64>> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::test_support::map_of;
+    use crate::map_compare::transformed;
+    use crate::test_support::{map_of, ROOM};
 
-    /// Two rooms of different sizes joined by a corridor: no symmetry.
+    /// A room and a corridor leading to a second, smaller room: no symmetry.
     fn floor() -> LineMap {
-        map_of(&[
-            [0.0, 0.0, 10.0, 0.0],
-            [10.0, 0.0, 10.0, 6.0],
-            [10.0, 6.0, 0.0, 6.0],
-            [0.0, 6.0, 0.0, 0.0],
-            [4.0, 0.0, 4.0, 2.5],
+        let mut walls = ROOM.to_vec();
+        walls.extend([
             [10.0, 2.0, 25.0, 2.0],
             [10.0, 4.0, 22.0, 4.0],
             [22.0, 4.0, 22.0, 12.0],
             [25.0, 2.0, 25.0, 12.0],
             [22.0, 12.0, 25.0, 12.0],
-        ])
-    }
-
-    /// `map` with every wall moved by `pose`.
-    fn moved(map: &LineMap, pose: &Pose2<f64>) -> LineMap {
-        let walls: Vec<[f64; 4]> = map
-            .segments
-            .iter()
-            .map(|s| {
-                let (a, b) = (pose.transform_point(&s.start), pose.transform_point(&s.end));
-                [a.x, a.y, b.x, b.y]
-            })
-            .collect();
+        ]);
         map_of(&walls)
     }
 
@@ -233,7 +218,7 @@ mod tests {
             Pose2::new(20.0, -5.0, 200f64.to_radians()),
             Pose2::new(0.3, 0.2, -95f64.to_radians()),
         ] {
-            let map = moved(&reference, &motion);
+            let map = transformed(&reference, &motion);
             let coarse = coarse_alignment(&map, &reference).unwrap();
             let back = coarse.compose(&motion);
             assert!(
@@ -249,7 +234,7 @@ mod tests {
     #[test]
     fn direction_histograms_line_up_at_the_turn_between_them() {
         let reference = floor();
-        let map = moved(&reference, &Pose2::new(0.0, 0.0, 34f64.to_radians()));
+        let map = transformed(&reference, &Pose2::new(0.0, 0.0, 34f64.to_radians()));
         let turn = best_turn(&direction_histogram(&map), &direction_histogram(&reference));
         // 34° back is 146° modulo 180°, or 56° modulo 90°.
         let degrees = turn.to_degrees().round() as i64;
