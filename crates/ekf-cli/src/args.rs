@@ -482,8 +482,9 @@ pub struct MapCompareArgs {
     /// The reference line map (JSON).
     #[arg(long)]
     pub reference: PathBuf,
-    /// Move the map onto the reference first by a rigid alignment (ICP of its walls to the
-    /// reference's, from the identity).
+    /// Move the map onto the reference first by a rigid alignment: ICP of its walls to the
+    /// reference's, from the identity and, if a coarse search from any start puts the map
+    /// elsewhere, from there too (the one that matches more is kept).
     #[arg(long)]
     pub align: bool,
     /// Print the result as JSON.

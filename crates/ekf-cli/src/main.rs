@@ -408,11 +408,11 @@ fn map_compare_command(a: MapCompareArgs) -> Outcome {
     let line_map = ekf_ros::replay::load_map(&a.map)?;
     let reference = ekf_ros::replay::load_map(&a.reference)?;
     let params = Default::default();
-    let alignment = match a.align {
-        true => ekf_ros::map_search::alignment(&line_map, &reference, &params),
-        false => ekf_core::Pose2::new(0.0, 0.0, 0.0),
+    let identity = ekf_core::Pose2::new(0.0, 0.0, 0.0);
+    let comparison = match a.align {
+        true => ekf_ros::map_search::aligned_comparison(&line_map, &reference, &params),
+        false => map_compare::compare(&line_map, &reference, &identity, &params),
     };
-    let comparison = map_compare::compare(&line_map, &reference, &alignment, &params);
     print_result(&comparison, a.json, &comparison)
 }
 

@@ -201,10 +201,10 @@ pub(crate) fn transformed(map: &LineMap, pose: &Pose2<f64>) -> LineMap {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::test_support::{map_of, ROOM};
+    use crate::test_support::{map_of, ROOM_WITH_STUB};
 
     fn room() -> LineMap {
-        map_of(&ROOM)
+        map_of(&ROOM_WITH_STUB)
     }
 
     #[test]

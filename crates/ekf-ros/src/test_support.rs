@@ -16,7 +16,7 @@ pub fn map_of(walls: &[[f64; 4]]) -> LineMap {
 }
 
 /// A 10 × 6 m room with a 2.5 m stub wall inside.
-pub const ROOM: [[f64; 4]; 5] = [
+pub const ROOM_WITH_STUB: [[f64; 4]; 5] = [
     [0.0, 0.0, 10.0, 0.0],
     [10.0, 0.0, 10.0, 6.0],
     [10.0, 6.0, 0.0, 6.0],

@@ -178,10 +178,11 @@ impl FrontEnd {
     /// The scan's points aligned to the local map's ([`align`]) from the filter's pose
     /// and, when the scan's lines moved the filter by more than [`SAME_START_M`] or
     /// [`SAME_START_RAD`], from the pose predicted before them; of two alignments, the
-    /// [`preferred`] one (McNemar's test at [`PREFERENCE_PROBABILITY`]). A scan's few lines can pull the filter along
-    /// a corridor (fhw: 0.7 m twice) or onto walls turned by ten degrees or more at a
-    /// turn (edmonton: 14° once, out of the matcher's reach), and the matcher, started
-    /// there, settles in a local minimum that the prediction's start avoids.
+    /// [`preferred`] one (McNemar's test at [`PREFERENCE_PROBABILITY`]). A scan's few
+    /// lines can pull the filter along a corridor (fhw: 0.7 m twice) or onto walls turned
+    /// by ten degrees or more at a turn (edmonton: 14° once, out of the matcher's reach),
+    /// and the matcher, started there, settles in a local minimum that the prediction's
+    /// start avoids.
     fn align_from(
         &self,
         points: &ScanPoints,

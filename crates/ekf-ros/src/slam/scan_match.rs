@@ -9,9 +9,10 @@
 //! pose down far better: the residual of point `pᵢ` (robot frame) against its nearest
 //! reference point `qᵢ` with surface normal `nᵢ` is `rᵢ = nᵢ·(R(θ)pᵢ + t − qᵢ)` (Censi's
 //! point-to-line metric), and the pose minimises
-//! `Σ ρ(rᵢ²/σ²) + (x − x₀)ᵀ P₀⁻¹ (x − x₀)`, `ρ` Huber's and `P₀` a weak prior around the
-//! filter's pose that holds the directions the points do not constrain (along a
-//! corridor) where the filter had them.
+//! `Σ ρ(rᵢ²/σ²) + (x − x₀)ᵀ P₀⁻¹ (x − x₀)`, `ρ` Huber's and `P₀` a weak prior around
+//! the start `x₀` (the filter's pose, or the pose predicted before the scan's lines)
+//! that holds the directions the points do not constrain (along a corridor) where the
+//! start had them.
 
 use crate::slam_config::{MatchParams, REFERENCE_VOXEL};
 use ekf_core::{angle_diff, Pose2};
@@ -246,8 +247,10 @@ fn cell_of(p: &Vector2<f64>, cell: f64) -> (i64, i64) {
 /// Which of two poses of the robot, `a` and `b`, the scan's points fit better, by
 /// McNemar's test on the points that lie within the Huber threshold (`2σ`) of their
 /// nearest reference surface at one pose and not at the other: with `n_a` such points at
-/// `a` only and `n_b` at `b` only, `(n_a − n_b)² / (n_a + n_b)` is χ²₁ if neither pose fits
-/// better. [`Ordering::Greater`] (`a`) or [`Ordering::Less`] (`b`) when it exceeds
+/// `a` only and `n_b` at `b` only, `(|n_a − n_b| − 1)² / (n_a + n_b)` (Edwards' continuity
+/// correction) is about χ²₁ if neither pose fits better; neighbouring beams on one wall do
+/// not err independently, so the test prefers a pose more readily than its probability
+/// says. [`Ordering::Greater`] (`a`) or [`Ordering::Less`] (`b`) when it exceeds
 /// `bound`; `None` when the points do not tell them apart.
 pub fn points_prefer(
     reference: &ReferenceCloud,
@@ -273,7 +276,7 @@ pub fn points_prefer(
     let (na, nb) = (f64::from(only_a), f64::from(only_b));
     let statistic = match only_a + only_b {
         0 => 0.0,
-        _ => (na - nb).powi(2) / (na + nb),
+        _ => ((na - nb).abs() - 1.0).max(0.0).powi(2) / (na + nb),
     };
     (statistic > bound).then(|| only_a.cmp(&only_b))
 }
@@ -292,9 +295,9 @@ pub fn preferred(
 ) -> Alignment {
     match points_prefer(reference, scan, (&a.pose, &b.pose), params, bound) {
         Some(Ordering::Greater) => a,
-        Some(_) => b,
-        None if mahalanobis(predicted, &b.pose) < mahalanobis(predicted, &a.pose) => b,
-        None => a,
+        Some(Ordering::Less) => b,
+        _ if mahalanobis(predicted, &b.pose) < mahalanobis(predicted, &a.pose) => b,
+        _ => a,
     }
 }
 
