@@ -116,7 +116,13 @@ impl Grid {
     /// be moved to more than [`MAX_OFFSETS`] offsets over it, larger; `None` if either has
     /// no points or their extent is not finite.
     fn of_walls(reference: &LineMap, samples: &[Point2<f64>]) -> Option<Self> {
-        let (low, high) = bounds(&samples_every(reference, CELL / 2.0))?;
+        // A wall lies within the box of its ends: no need to sample it for the bounds.
+        let ends: Vec<Point2<f64>> = reference
+            .segments
+            .iter()
+            .flat_map(|s| [s.start, s.end])
+            .collect();
+        let (low, high) = bounds(&ends)?;
         let (map_low, map_high) = bounds(samples)?;
         // Whatever the turn, the map's points stay within its bounding box's diagonal.
         let reach = (map_high - map_low).norm();
