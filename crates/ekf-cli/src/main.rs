@@ -5,6 +5,7 @@
 //! returns through the result's `Display` (or `--json`).
 
 mod args;
+mod output;
 
 use args::{
     Cli, CliMode, CliSteering, Command, CompareArgs, ConfigArgs, CorpusArgs, EmulateArgs,
@@ -21,6 +22,7 @@ use ekf_cli::import::{CarmenFlavour, CarmenOptions, SyntheticCompass};
 use ekf_cli::live;
 use ekf_cli::replay::{self, Mode, ReplayOptions};
 use ekf_ros::map_compare;
+use output::{emit, emit_line, Closed};
 use serde::Serialize;
 use std::io::IsTerminal;
 use std::path::Path;
@@ -92,11 +94,10 @@ fn progress_bar() -> Option<indicatif::ProgressBar> {
 /// Prints `value` as pretty JSON with `--json`, else `text` (which ends its own lines).
 fn print_result(value: &impl Serialize, json: bool, text: impl std::fmt::Display) -> Outcome {
     if json {
-        println!("{}", serde_json::to_string_pretty(value)?);
+        emit_line(serde_json::to_string_pretty(value)?)
     } else {
-        print!("{text}");
+        emit(text)
     }
-    Ok(())
 }
 
 fn main() -> ExitCode {
@@ -120,6 +121,7 @@ fn main() -> ExitCode {
     };
     match outcome {
         Ok(()) => ExitCode::SUCCESS,
+        Err(e) if e.is::<Closed>() => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("ekf: error: {e}");
             ExitCode::FAILURE
@@ -215,8 +217,8 @@ fn experiment_command(a: ExperimentArgs) -> Outcome {
 
 fn config_command(a: ConfigArgs) -> Outcome {
     match a.preset {
-        None => print!("{DEFAULT_TOML}"),
-        Some(name) => print!("{}", Config::preset_text(&name)?),
+        None => emit(DEFAULT_TOML)?,
+        Some(name) => emit(Config::preset_text(&name)?)?,
     }
     Ok(())
 }
@@ -255,20 +257,26 @@ fn live_command(a: LiveArgs) -> Outcome {
         mode: a.mode.into(),
     };
     let stop = stop_on_signals()?;
-    let outcome = live::run(
-        &config,
-        &options,
-        stop,
-        &mut |event| match event.pose_json() {
-            Some(line) if a.json => println!("{line}"),
-            Some(_) => println!("{event}"),
-            None => eprintln!("ekf: {event}"),
-        },
-    )?;
+    // A reader of the poses that goes away stops the run as Ctrl-C does, so that the
+    // recording is closed properly.
+    let closed = Arc::clone(&stop);
+    let outcome = live::run(&config, &options, stop, &mut |event| {
+        let printed = match event.pose_json() {
+            Some(line) if a.json => emit_line(line),
+            Some(_) => emit_line(event),
+            None => {
+                eprintln!("ekf: {event}");
+                Ok(())
+            }
+        };
+        if printed.is_err() {
+            closed.store(true, std::sync::atomic::Ordering::SeqCst);
+        }
+    })?;
     if a.json {
-        println!("{}", serde_json::to_string(&outcome.summary)?);
+        emit_line(serde_json::to_string(&outcome.summary)?)?;
     } else {
-        print!("{}", outcome.summary);
+        emit(&outcome.summary)?;
     }
     match outcome.failure {
         Some(failure) => Err(failure.into()),
@@ -293,15 +301,15 @@ fn emulate_command(a: EmulateArgs) -> Outcome {
     };
     let stop = stop_on_signals()?;
     let emulation = emulate::Emulation::start(&options)?;
-    print!("{}", emulation.connection());
+    emit(emulation.connection())?;
     eprintln!(
         "ekf: the robot stands at its start until ekf live has brought up the laser and the base"
     );
     let summary = emulation.run(&stop)?;
     if a.json {
-        println!("{}", serde_json::to_string(&summary)?);
+        emit_line(serde_json::to_string(&summary)?)?;
     } else {
-        print!("{summary}");
+        emit(&summary)?;
     }
     Ok(())
 }
@@ -428,13 +436,12 @@ fn map_plot_command(a: MapPlotArgs) -> Outcome {
         .map_err(|e| format!("{}: {e}", a.svg.display()))?;
     create_parent(&a.svg)?;
     std::fs::write(&a.svg, svg).map_err(|e| format!("{}: {e}", a.svg.display()))?;
-    println!(
+    emit_line(format_args!(
         "{}: {} walls, {} trajectories",
         a.svg.display(),
         line_map.len(),
         trajectories.len()
-    );
-    Ok(())
+    ))
 }
 
 fn import_carmen_command(a: ImportCarmenArgs) -> Outcome {
