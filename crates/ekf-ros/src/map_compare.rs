@@ -2,6 +2,7 @@
 //! length a map reproduces, and how much of the map has no counterpart in it — after an
 //! optional rigid alignment of the map onto the reference.
 
+use crate::wall_index::WallIndex;
 use ekf_core::{angle_diff, Pose2};
 use lrf_lines::{LineMap, MapSegment};
 use nalgebra::{Matrix3, Point2, Vector2, Vector3};
@@ -105,15 +106,17 @@ pub fn align(map: &LineMap, reference: &LineMap, initial: &Pose2<f64>) -> Pose2<
         .iter()
         .flat_map(|s| pieces(s, 0.2).map(move |(p, _)| (p, s.line.beta)))
         .collect();
+    let gates = [(1.0, 10f64.to_radians()), (0.3, 5f64.to_radians())];
+    let index = WallIndex::new(reference, gates[0].0);
     let mut pose = *initial;
-    for (gate, angle) in [(1.0, 10f64.to_radians()), (0.3, 5f64.to_radians())] {
+    for (gate, angle) in gates {
         for _ in 0..30 {
             let mut h = Matrix3::zeros();
             let mut g = Vector3::zeros();
             for (p, beta) in &samples {
                 let q = pose.transform_point(p);
                 let b = beta + pose.theta;
-                let Some(wall) = nearest(reference, &q, b, gate, angle) else {
+                let Some(wall) = nearest(&index, &q, b, gate, angle) else {
                     continue;
                 };
                 // r = n·q − ρ; dr/d(x, y, θ) = (n_x, n_y, n·perp(q − t)).
@@ -139,11 +142,20 @@ pub fn align(map: &LineMap, reference: &LineMap, initial: &Pose2<f64>) -> Pose2<
 
 /// The total length of `of`'s walls and the part of it within reach of `by`'s.
 fn covered(of: &LineMap, by: &LineMap, params: &CompareParams) -> (f64, f64) {
+    let index = WallIndex::new(by, params.max_distance);
     let (mut total, mut matched) = (0.0, 0.0);
     for s in &of.segments {
         for (p, len) in pieces(s, params.step) {
             total += len;
-            if nearest(by, &p, s.line.beta, params.max_distance, params.max_angle).is_some() {
+            if nearest(
+                &index,
+                &p,
+                s.line.beta,
+                params.max_distance,
+                params.max_angle,
+            )
+            .is_some()
+            {
                 matched += len;
             }
         }
@@ -151,25 +163,19 @@ fn covered(of: &LineMap, by: &LineMap, params: &CompareParams) -> (f64, f64) {
     (total, matched)
 }
 
-/// The wall of `map` nearest to `p` among those within `max_distance` (as segments) whose
-/// direction is within `max_angle` of `beta` (either way round).
+/// The wall of the indexed map nearest to `p` among those within `max_distance` (as
+/// segments) whose direction is within `max_angle` of `beta` (either way round).
 fn nearest<'a>(
-    map: &'a LineMap,
+    index: &WallIndex<'a>,
     p: &Point2<f64>,
     beta: f64,
     max_distance: f64,
     max_angle: f64,
 ) -> Option<&'a MapSegment> {
-    map.segments
-        .iter()
-        .filter(|s| {
-            let d = angle_diff(s.line.beta, beta).abs();
-            d.min(std::f64::consts::PI - d) <= max_angle
-        })
-        .map(|s| (s, s.distance_to(p)))
-        .filter(|(_, d)| *d <= max_distance)
-        .min_by(|a, b| a.1.total_cmp(&b.1))
-        .map(|(s, _)| s)
+    index.nearest(p, max_distance, |s| {
+        let d = angle_diff(s.line.beta, beta).abs();
+        d.min(std::f64::consts::PI - d) <= max_angle
+    })
 }
 
 /// The middles and lengths of the pieces, at most `step` long, a wall is cut into.
