@@ -3,9 +3,9 @@
 
 mod live_support;
 
-use ekf_cli::emulate::{Device, EmulatorOptions, Emulators, RobotSample};
+use ekf_cli::emulate::{EmulatorOptions, Emulators, RobotSample};
 use ekf_cli::mcap_io::BagReader;
-use live_support::ekf;
+use live_support::{ekf, live_on};
 use std::process::Stdio;
 use std::time::{Duration, Instant};
 
@@ -40,13 +40,7 @@ fn a_closed_stdout_stops_live_mode_with_its_recording_finished() {
     })
     .unwrap();
     let recording = dir.path().join("run.mcap");
-    let mut live = ekf()
-        .args(["live", "--json", "--laser"])
-        .arg(emulators.path(Device::Laser))
-        .arg("--base")
-        .arg(emulators.path(Device::Base))
-        .arg("--record")
-        .arg(&recording)
+    let mut live = live_on(&emulators, &recording)
         .stdout(closed_pipe())
         .stderr(Stdio::piped())
         .spawn()

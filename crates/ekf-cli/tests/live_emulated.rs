@@ -9,7 +9,7 @@ use ekf_cli::devices::sick::device::Sweep;
 use ekf_cli::devices::sick::RangeUnit;
 use ekf_cli::emulate::{Device, EmulatorOptions, Emulators, Fault, RobotSample};
 use ekf_cli::mcap_io::BagReader;
-use live_support::{assert_replay_gives_the_same_poses, ekf};
+use live_support::{assert_replay_gives_the_same_poses, ekf, live_on};
 use std::f64::consts::{FRAC_PI_2, TAU};
 use std::path::Path;
 use std::path::PathBuf;
@@ -302,13 +302,7 @@ fn drive_live_with(
     // Into files, not pipes: a pipe nobody reads fills up (64 kB, about 25 s of poses)
     // and then blocks `ekf live`.
     let (out_path, err_path) = (dir.path().join("stdout"), dir.path().join("stderr"));
-    let mut live = ekf()
-        .args(["live", "--json", "--laser"])
-        .arg(emulators.path(Device::Laser))
-        .arg("--base")
-        .arg(emulators.path(Device::Base))
-        .arg("--record")
-        .arg(&recording)
+    let mut live = live_on(&emulators, &recording)
         .args(args)
         .stdout(std::fs::File::create(&out_path).unwrap())
         .stderr(std::fs::File::create(&err_path).unwrap())

@@ -8,8 +8,22 @@ mod ekf_bin;
 
 pub use ekf_bin::ekf;
 use ekf_bin::run_ok;
+use ekf_cli::emulate::{Device, Emulators};
 use ekf_cli::mcap_io::BagReader;
 use std::path::Path;
+use std::process::Command;
+
+/// `ekf live --json` on the emulators' laser and base, recording to `recording`.
+pub fn live_on(emulators: &Emulators, recording: &Path) -> Command {
+    let mut live = ekf();
+    live.args(["live", "--json", "--laser"])
+        .arg(emulators.path(Device::Laser))
+        .arg("--base")
+        .arg(emulators.path(Device::Base))
+        .arg("--record")
+        .arg(recording);
+    live
+}
 
 /// `(log time, CDR bytes)` of every message on `topic` of a bag.
 pub fn messages(path: &Path, topic: &str) -> Vec<(u64, Vec<u8>)> {
