@@ -7,11 +7,17 @@
 //! square of half-side `reach + cell / 2` around it. A point `p` within `reach` of the
 //! wall is within `reach` of the wall's point `s` nearest to it, and `s` is within
 //! `cell / 2` of a sample `q`, so `|p − q|∞ ≤ reach + cell / 2`: `p`'s cell is registered.
-//! The work and memory grow with the walls' length, not with the map's area.
+//! The work and memory grow with the walls' length, not with the map's area. A wall
+//! longer than [`MAX_SAMPLES`] cells (a stray wall of a damaged map) is not registered;
+//! every query looks at it instead.
 
 use lrf_lines::{LineMap, MapSegment};
 use nalgebra::Point2;
 use std::collections::HashMap;
+
+/// Walls longer than this many cells are not registered (see the module documentation):
+/// 25 km at the smallest cell, far beyond a building's walls.
+pub const MAX_SAMPLES: usize = 100_000;
 
 /// The walls of one map by grid cell (see the module documentation).
 #[derive(Debug, Clone)]
@@ -20,6 +26,8 @@ pub struct WallIndex<'a> {
     reach: f64,
     cell: f64,
     cells: HashMap<(i64, i64), Vec<usize>>,
+    /// Walls too long to register, looked at by every query.
+    unregistered: Vec<usize>,
 }
 
 impl<'a> WallIndex<'a> {
@@ -28,9 +36,16 @@ impl<'a> WallIndex<'a> {
     pub fn new(map: &'a LineMap, reach: f64) -> Self {
         let cell = reach.max(0.25);
         let mut cells: HashMap<(i64, i64), Vec<usize>> = HashMap::new();
+        let mut unregistered = Vec::new();
         let half = reach + 0.5 * cell;
         for (i, wall) in map.segments.iter().enumerate() {
-            let samples = (wall.length() / cell).ceil().max(1.0) as usize;
+            let samples = (wall.length() / cell).ceil().max(1.0);
+            // Also a non-finite length or cell.
+            if !samples.is_finite() || samples > MAX_SAMPLES as f64 {
+                unregistered.push(i);
+                continue;
+            }
+            let samples = samples as usize;
             for k in 0..=samples {
                 let q = wall.start + (wall.end - wall.start) * (k as f64 / samples as f64);
                 let (x0, y0) = cell_of(q.x - half, q.y - half, cell);
@@ -51,6 +66,7 @@ impl<'a> WallIndex<'a> {
             reach,
             cell,
             cells,
+            unregistered,
         }
     }
 
@@ -64,9 +80,13 @@ impl<'a> WallIndex<'a> {
     ) -> Option<&'a MapSegment> {
         let max_distance = max_distance.min(self.reach);
         let map = self.map;
-        self.cells
-            .get(&cell_of(p.x, p.y, self.cell))?
+        let registered = self
+            .cells
+            .get(&cell_of(p.x, p.y, self.cell))
+            .map_or(&[][..], Vec::as_slice);
+        registered
             .iter()
+            .chain(&self.unregistered)
             .map(|&i| &map.segments[i])
             .filter(|s| accept(s))
             .map(|s| (s, s.distance_to(p)))
@@ -119,6 +139,24 @@ mod tests {
                 prop_assert_eq!(full, indexed);
             }
         }
+    }
+
+    #[test]
+    fn a_wall_too_long_to_register_is_still_found() {
+        let map = LineMap {
+            frame_id: "map".into(),
+            segments: vec![wall(0.0, 0.0, 1e7, 0.0), wall(0.0, 1.0, 10.0, 1.0)],
+        };
+        let index = WallIndex::new(&map, 0.1);
+        assert_eq!(index.unregistered, vec![0]);
+        let far = index
+            .nearest(&Point2::new(5e6, 0.05), 0.1, |_| true)
+            .unwrap();
+        assert_eq!(far.end, Point2::new(1e7, 0.0));
+        let near = index
+            .nearest(&Point2::new(5.0, 0.95), 0.1, |_| true)
+            .unwrap();
+        assert_eq!(near.start, Point2::new(0.0, 1.0));
     }
 
     #[test]
