@@ -23,7 +23,6 @@ pub mod slam;
 pub mod slam_config;
 pub mod trajectory;
 pub mod tum;
-pub mod wall_index;
 
 #[cfg(test)]
 mod test_support;

@@ -2,8 +2,8 @@
 //! length a map reproduces, and how much of the map has no counterpart in it — after an
 //! optional rigid alignment of the map onto the reference.
 
-use crate::wall_index::WallIndex;
 use ekf_core::{angle_diff, Pose2};
+use lrf_lines::map::WallIndex;
 use lrf_lines::{LineMap, MapSegment};
 use nalgebra::{Matrix3, Point2, Vector2, Vector3};
 use serde::Serialize;
@@ -106,17 +106,16 @@ pub fn align(map: &LineMap, reference: &LineMap, initial: &Pose2<f64>) -> Pose2<
         .iter()
         .flat_map(|s| pieces(s, 0.2).map(move |(p, _)| (p, s.line.beta)))
         .collect();
-    let gates = [(1.0, 10f64.to_radians()), (0.3, 5f64.to_radians())];
-    let index = WallIndex::new(reference, gates[0].0);
+    let mut walls = Walls::of(reference);
     let mut pose = *initial;
-    for (gate, angle) in gates {
+    for (gate, angle) in [(1.0, 10f64.to_radians()), (0.3, 5f64.to_radians())] {
         for _ in 0..30 {
             let mut h = Matrix3::zeros();
             let mut g = Vector3::zeros();
             for (p, beta) in &samples {
                 let q = pose.transform_point(p);
                 let b = beta + pose.theta;
-                let Some(wall) = nearest(&index, &q, b, gate, angle) else {
+                let Some(wall) = walls.nearest(&q, b, gate, angle) else {
                     continue;
                 };
                 // r = n·q − ρ; dr/d(x, y, θ) = (n_x, n_y, n·perp(q − t)).
@@ -142,19 +141,14 @@ pub fn align(map: &LineMap, reference: &LineMap, initial: &Pose2<f64>) -> Pose2<
 
 /// The total length of `of`'s walls and the part of it within reach of `by`'s.
 fn covered(of: &LineMap, by: &LineMap, params: &CompareParams) -> (f64, f64) {
-    let index = WallIndex::new(by, params.max_distance);
+    let mut walls = Walls::of(by);
     let (mut total, mut matched) = (0.0, 0.0);
     for s in &of.segments {
         for (p, len) in pieces(s, params.step) {
             total += len;
-            if nearest(
-                &index,
-                &p,
-                s.line.beta,
-                params.max_distance,
-                params.max_angle,
-            )
-            .is_some()
+            if walls
+                .nearest(&p, s.line.beta, params.max_distance, params.max_angle)
+                .is_some()
             {
                 matched += len;
             }
@@ -163,19 +157,47 @@ fn covered(of: &LineMap, by: &LineMap, params: &CompareParams) -> (f64, f64) {
     (total, matched)
 }
 
-/// The wall of the indexed map nearest to `p` among those within `max_distance` (as
-/// segments) whose direction is within `max_angle` of `beta` (either way round).
-fn nearest<'a>(
-    index: &WallIndex<'a>,
-    p: &Point2<f64>,
-    beta: f64,
-    max_distance: f64,
-    max_angle: f64,
-) -> Option<&'a MapSegment> {
-    index.nearest(p, max_distance, |s| {
-        let d = angle_diff(s.line.beta, beta).abs();
-        d.min(std::f64::consts::PI - d) <= max_angle
-    })
+/// A map's walls with a [`WallIndex`] of them, for many nearest-wall queries.
+struct Walls<'a> {
+    map: &'a LineMap,
+    index: WallIndex,
+    /// The candidates of the last query (kept to reuse its allocation).
+    candidates: Vec<usize>,
+}
+
+impl<'a> Walls<'a> {
+    fn of(map: &'a LineMap) -> Self {
+        Self {
+            map,
+            index: WallIndex::of_map(map),
+            candidates: Vec::new(),
+        }
+    }
+
+    /// The wall nearest to `p` among those within `max_distance` (as segments) whose
+    /// direction is within `max_angle` of `beta` (either way round); of equally near
+    /// walls, the first in the map.
+    fn nearest(
+        &mut self,
+        p: &Point2<f64>,
+        beta: f64,
+        max_distance: f64,
+        max_angle: f64,
+    ) -> Option<&'a MapSegment> {
+        self.index.near(p, p, max_distance, &mut self.candidates);
+        let map = self.map;
+        self.candidates
+            .iter()
+            .map(|&i| &map.segments[i])
+            .filter(|s| {
+                let d = angle_diff(s.line.beta, beta).abs();
+                d.min(std::f64::consts::PI - d) <= max_angle
+            })
+            .map(|s| (s, s.distance_to(p)))
+            .filter(|(_, d)| *d <= max_distance)
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .map(|(s, _)| s)
+    }
 }
 
 /// The middles and lengths of the pieces, at most `step` long, a wall is cut into.
@@ -208,9 +230,47 @@ pub(crate) fn transformed(map: &LineMap, pose: &Pose2<f64>) -> LineMap {
 mod tests {
     use super::*;
     use crate::test_support::{map_of, ROOM_WITH_STUB};
+    use proptest::prelude::*;
 
     fn room() -> LineMap {
         map_of(&ROOM_WITH_STUB)
+    }
+
+    proptest! {
+        /// The indexed search finds exactly the wall a search of every wall finds.
+        #[test]
+        fn the_indexed_search_finds_what_a_full_search_finds(
+            ends in prop::collection::vec((-20.0..20.0f64, -20.0..20.0f64, -20.0..20.0f64, -20.0..20.0f64), 1..30),
+            queries in prop::collection::vec((-22.0..22.0f64, -22.0..22.0f64, -3.2..3.2f64), 50),
+            reach in prop_oneof![Just(0.1), Just(0.3), Just(1.0), Just(2.5)],
+        ) {
+            let map = LineMap {
+                frame_id: "map".into(),
+                segments: ends
+                    .iter()
+                    .filter_map(|&(a, b, c, d)| {
+                        MapSegment::from_points(Point2::new(a, b), Point2::new(c, d)).ok()
+                    })
+                    .collect(),
+            };
+            let mut walls = Walls::of(&map);
+            let angle = 30f64.to_radians();
+            for (x, y, beta) in queries {
+                let p = Point2::new(x, y);
+                let full = map
+                    .segments
+                    .iter()
+                    .filter(|s| {
+                        let d = angle_diff(s.line.beta, beta).abs();
+                        d.min(std::f64::consts::PI - d) <= angle
+                    })
+                    .map(|s| (s, s.distance_to(&p)))
+                    .filter(|(_, d)| *d <= reach)
+                    .min_by(|a, b| a.1.total_cmp(&b.1))
+                    .map(|(s, _)| s);
+                prop_assert_eq!(full, walls.nearest(&p, beta, reach, angle));
+            }
+        }
     }
 
     #[test]

@@ -9,6 +9,7 @@ mod wall_index;
 
 pub use builder::{MapBuilder, MapBuilderParams, NEAR_M};
 pub use json::{MapFormatError, MapFormatErrorKind, MAP_FORMAT, MAP_FORMAT_VERSION};
+pub use wall_index::WallIndex;
 
 use crate::ObservedLine;
 use alloc::string::String;

@@ -1,6 +1,7 @@
 //! A spatial index of wall segments, so that [`super::MapBuilder`] compares a sighting
 //! only with the walls near it instead of with every wall so far (which made building a
-//! map from a long log quadratic in its length).
+//! map from a long log quadratic in its length), and a map comparison looks for a
+//! point's nearest wall among the walls near it.
 
 use alloc::collections::BTreeMap;
 use alloc::vec::Vec;
@@ -20,25 +21,35 @@ const SAMPLE_STEP_M: f64 = CELL_M / 2.0;
 /// walk billions of cells.
 const MAX_INDEXED_LENGTH_M: f64 = 10_000.0;
 
-/// Wall ids by the square cells of side [`CELL_M`] their segments pass through.
+/// Wall ids by the square cells (`CELL_M` = 4 m a side) their segments pass through.
 ///
 /// [`near`](Self::near) returns every id whose segment (as last inserted) comes within
 /// `reach` of the query segment, and possibly a few more: callers test the candidates
 /// exactly. A segment is registered in the cells of points sampled every
-/// [`SAMPLE_STEP_M`] along it; a query looks in the cells of its own samples dilated by
-/// `k = ⌈(reach + SAMPLE_STEP_M) / CELL_M⌉` cells, which covers any pair of points within
-/// `reach` of each other (each is within `SAMPLE_STEP_M / 2` of a sample).
+/// `SAMPLE_STEP_M` = 2 m along it; a query looks in the cells of its own samples dilated
+/// by `k = ⌈(reach + SAMPLE_STEP_M) / CELL_M⌉` cells, which covers any pair of points
+/// within `reach` of each other (each is within `SAMPLE_STEP_M / 2` of a sample).
+/// Segments longer than 10 km are not rasterised: every query returns them.
 #[derive(Debug, Clone, Default)]
-pub(super) struct WallIndex {
+pub struct WallIndex {
     cells: BTreeMap<(i32, i32), Vec<usize>>,
     oversize: Vec<usize>,
 }
 
 impl WallIndex {
+    /// The walls of `map`, each registered under its position in `map.segments`.
+    pub fn of_map(map: &super::LineMap) -> Self {
+        let mut index = Self::default();
+        for (id, wall) in map.segments.iter().enumerate() {
+            index.insert(id, &wall.start, &wall.end);
+        }
+        index
+    }
+
     /// Registers `id` in the cells `start`–`end` passes through. Inserting the same id
     /// again (after its wall grew or moved) adds the new cells; old cells keep it, which
     /// only costs a candidate that fails the exact test.
-    pub(super) fn insert(&mut self, id: usize, start: &Point2<f64>, end: &Point2<f64>) {
+    pub fn insert(&mut self, id: usize, start: &Point2<f64>, end: &Point2<f64>) {
         if !fits(start, end) {
             if !self.oversize.contains(&id) {
                 self.oversize.push(id);
@@ -55,13 +66,7 @@ impl WallIndex {
 
     /// Clears `out` and fills it with the ids, ascending and each once, of the segments
     /// that may come within `reach` (m) of `start`–`end`.
-    pub(super) fn near(
-        &self,
-        start: &Point2<f64>,
-        end: &Point2<f64>,
-        reach: f64,
-        out: &mut Vec<usize>,
-    ) {
+    pub fn near(&self, start: &Point2<f64>, end: &Point2<f64>, reach: f64, out: &mut Vec<usize>) {
         out.clear();
         out.extend_from_slice(&self.oversize);
         if !fits(start, end) {
