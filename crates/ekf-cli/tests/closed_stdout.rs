@@ -3,9 +3,9 @@
 
 mod live_support;
 
-use ekf_cli::emulate::{EmulatorOptions, Emulators, RobotSample};
+use ekf_cli::devices::sick::RangeUnit;
 use ekf_cli::mcap_io::BagReader;
-use live_support::{ekf, live_on};
+use live_support::{ekf, live_on, start_emulators, still};
 use std::process::Stdio;
 use std::time::{Duration, Instant};
 
@@ -33,12 +33,7 @@ fn a_closed_stdout_ends_a_command_quietly() {
 #[test]
 fn a_closed_stdout_stops_live_mode_with_its_recording_finished() {
     let dir = tempfile::tempdir().unwrap();
-    let emulators = Emulators::start(&EmulatorOptions {
-        dir: dir.path().join("dev"),
-        unit: ekf_cli::devices::sick::RangeUnit::Millimetres,
-        unit_id: 1,
-    })
-    .unwrap();
+    let emulators = start_emulators(dir.path(), RangeUnit::Millimetres);
     let recording = dir.path().join("run.mcap");
     let mut live = live_on(&emulators, &recording)
         .stdout(closed_pipe())
@@ -54,15 +49,7 @@ fn a_closed_stdout_stops_live_mode_with_its_recording_finished() {
             break status;
         }
         assert!(Instant::now() < deadline, "ekf live did not stop");
-        emulators.sample(RobotSample {
-            t_ns: u64::from(k) * 100_000_000,
-            left_ticks: 1000,
-            right_ticks: 2000,
-            bearing_deg: 45.0,
-            motion: None,
-            sweep: None,
-            gps: None,
-        });
+        emulators.sample(still(k, false));
         k += 1;
         std::thread::sleep(Duration::from_millis(100));
     };

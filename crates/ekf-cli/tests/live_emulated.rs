@@ -7,11 +7,10 @@ mod live_support;
 
 use ekf_cli::devices::sick::device::Sweep;
 use ekf_cli::devices::sick::RangeUnit;
-use ekf_cli::emulate::{Device, EmulatorOptions, Emulators, Fault, RobotSample};
+use ekf_cli::emulate::{Device, Emulators, Fault, RobotSample};
 use ekf_cli::mcap_io::BagReader;
-use live_support::{assert_replay_gives_the_same_poses, ekf, live_on};
+use live_support::{assert_replay_gives_the_same_poses, ekf, live_on, start_emulators, still};
 use std::f64::consts::{FRAC_PI_2, TAU};
-use std::path::Path;
 use std::path::PathBuf;
 use std::process::Command;
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
@@ -97,15 +96,6 @@ impl Robot {
             gps: None,
         }
     }
-}
-
-fn start_emulators(dir: &Path, unit: RangeUnit) -> Emulators {
-    Emulators::start(&EmulatorOptions {
-        dir: dir.join("dev"),
-        unit,
-        unit_id: 1,
-    })
-    .unwrap()
 }
 
 /// Sends `ekf live` `signal` (`kill`'s spelling, e.g. `-TERM`) and waits for it to end.
@@ -343,24 +333,6 @@ fn epoch_ns() -> u64 {
         .duration_since(UNIX_EPOCH)
         .unwrap()
         .as_nanos() as u64
-}
-
-/// A robot standing still whose sweep `k` measures `1 + k/1000` m everywhere (so a
-/// recorded scan says which sweep it is).
-fn still(k: u32, with_scan: bool) -> RobotSample {
-    RobotSample {
-        t_ns: u64::from(k) * 100_000_000,
-        left_ticks: 1000,
-        right_ticks: 2000,
-        bearing_deg: 45.0,
-        motion: None,
-        sweep: with_scan.then(|| Sweep {
-            angle_min: -FRAC_PI_2,
-            angle_increment: 0.5f64.to_radians(),
-            ranges: vec![1.0 + f64::from(k) / 1000.0; 361],
-        }),
-        gps: None,
-    }
 }
 
 #[test]
