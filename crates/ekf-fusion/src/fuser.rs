@@ -86,6 +86,10 @@ pub struct ScanFused {
     pub relocalized: Option<Verified>,
     /// The scan ended with the filter lost or unconfirmed: its pose is a guess.
     pub lost_after: bool,
+    /// The motion source was silent before this scan (a motion gap, [`tracking`]): what
+    /// the robot did meanwhile is not in the prediction. Reported whether or not loss
+    /// detection is on.
+    pub motion_gap: bool,
     /// An over-confident stretch began ([`crate::consistency`]).
     pub over_confident: bool,
 }
@@ -427,6 +431,7 @@ impl Fuser {
         let mut fused = ScanFused {
             report,
             predicted: Some(predicted),
+            motion_gap: gap,
             ..ScanFused::default()
         };
         self.check_tracking(scan, stamp_ns, gap, &mut fused)?;

@@ -261,13 +261,17 @@ fn after_a_motion_gap_one_scans_answer_stays_unconfirmed_until_a_tracked_scan_fi
         t += 50 * MS;
         let s = scan_outcome(&mut fuser, t, &scan_among(&room, &a, 20.0));
         assert!(s.lost.is_none() && !s.lost_after, "tracking at A: {s:?}");
+        assert!(!s.motion_gap, "{s:?}");
     }
     // Carried 1.5 m and turned while the odometry is silent for 2 s: a motion gap, and
     // the search alone places the robot. One scan's word: still lost.
     let b = Pose2::new(3.0, 1.8, 0.6);
     t += 2000 * MS;
     let s = scan_outcome(&mut fuser, t, &scan_among(&room, &b, 20.0));
-    assert!(s.lost.is_some_and(|l| l.motion_gap), "{s:?}");
+    assert!(
+        s.lost.is_some_and(|l| l.motion_gap) && s.motion_gap,
+        "{s:?}"
+    );
     assert!(s.relocalized.is_some() && s.lost_after, "{s:?}");
     let pose = fuser.localizer().pose();
     assert!((pose.x - b.x).hypot(pose.y - b.y) < 0.05, "{pose:?}");
@@ -291,4 +295,34 @@ fn after_a_motion_gap_one_scans_answer_stays_unconfirmed_until_a_tracked_scan_fi
     assert!(s.regained.is_some() && !s.lost_after, "{s:?}");
     assert_eq!(fuser.lost_for(), 0);
     assert_eq!(fuser.counts().tracking.scans_lost, 2);
+}
+
+#[test]
+fn a_motion_gap_is_reported_with_loss_detection_off() {
+    const MS: u64 = 1_000_000;
+    let config = FusionConfig {
+        mode: Mode::Laser,
+        tracking: Tracking::Off,
+        ..FusionConfig::default()
+    };
+    let room = l_room();
+    let a = Pose2::new(1.5, 1.5, 0.0);
+    let p0 = Matrix3::from_diagonal(&Vector3::new(0.01, 0.01, 0.001));
+    let mut fuser = Fuser::new(&config, a, p0, 0, Some(map_of(&room))).unwrap();
+    let odometry = Input::OdometryPose(Pose2::new(0.0, 0.0, 0.0));
+    let mut t = 0;
+    let mut gaps = Vec::new();
+    // Odometry every 100 ms with a scan after each, then 2 s of silence before a scan.
+    for silent_ms in [0, 0, 0, 0, 2000, 0] {
+        t += 50 * MS;
+        if silent_ms == 0 {
+            fuser.fuse(t, &odometry, &mut ()).unwrap();
+        }
+        t += 50 * MS + silent_ms * MS;
+        let s = scan_outcome(&mut fuser, t, &scan_among(&room, &a, 20.0));
+        assert!(s.lost.is_none() && s.relocalized.is_none(), "{s:?}");
+        gaps.push(s.motion_gap);
+    }
+    assert_eq!(gaps, [false, false, false, false, true, false]);
+    assert_eq!(fuser.counts().tracking.losses, 0);
 }

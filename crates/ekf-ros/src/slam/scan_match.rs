@@ -259,12 +259,7 @@ pub fn points_prefer(
     params: &MatchParams,
     bound: f64,
 ) -> Option<Ordering> {
-    let huber = 2.0 * params.sigma;
-    let fits = |w: &Vector2<f64>| {
-        reference
-            .nearest(w)
-            .is_some_and(|(q, n)| n.dot(&(w - q)).abs() <= huber)
-    };
+    let fits = |w: &Vector2<f64>| fits_surface(reference, w, params);
     let (mut only_a, mut only_b) = (0u32, 0u32);
     for ((wa, _), (wb, _)) in scan.placed(a).zip(scan.placed(b)) {
         match (fits(&wa), fits(&wb)) {
@@ -279,6 +274,74 @@ pub fn points_prefer(
         _ => ((na - nb).abs() - 1.0).max(0.0).powi(2) / (na + nb),
     };
     (statistic > bound).then(|| only_a.cmp(&only_b))
+}
+
+/// Whether the point `w` (reference frame) lies within the Huber threshold (`2σ`) of its
+/// nearest reference surface.
+fn fits_surface(reference: &ReferenceCloud, w: &Vector2<f64>, params: &MatchParams) -> bool {
+    reference
+        .nearest(w)
+        .is_some_and(|(q, n)| n.dot(&(w - q)).abs() <= 2.0 * params.sigma)
+}
+
+/// How many of the scan's points, placed at `pose`, fit their nearest reference surface
+/// ([`fits_surface`]).
+fn fitting_points(
+    reference: &ReferenceCloud,
+    scan: &ScanPoints,
+    pose: &Pose2<f64>,
+    params: &MatchParams,
+) -> usize {
+    scan.placed(pose)
+        .filter(|(w, _)| fits_surface(reference, w, params))
+        .count()
+}
+
+/// Of the turns of a sweep ([`align_swept`]), how many are aligned: those where most of
+/// the scan's points have a reference point within reach before any alignment.
+const SWEEP_ALIGNED_TURNS: usize = 3;
+
+/// The alignment of `scan` from `start` turned by a multiple of `step` (rad) around the
+/// circle (`+step`, `−step`, `+2·step`, ...; `start` itself is not tried), for a scan
+/// whose heading is unknown (after a motion gap), where one start reaches only a few
+/// degrees. Coarse to fine: every turn is scored by how many of the scan's points have a
+/// reference point within `max_distance` there, the [`SWEEP_ALIGNED_TURNS`] best (the
+/// first of equals) are aligned, and of those alignments the one with the most
+/// [`fitting_points`] wins.
+pub fn align_swept(
+    reference: &ReferenceCloud,
+    scan: &ScanPoints,
+    start: Pose2<f64>,
+    step: f64,
+    params: &MatchParams,
+) -> Option<Alignment> {
+    let steps = (core::f64::consts::PI / step).round().max(1.0) as i32;
+    let mut turns: Vec<(usize, Pose2<f64>)> = (1..=steps)
+        .flat_map(|k| [k, -k])
+        .filter(|&k| k != -steps)
+        .map(|k| {
+            let theta = ekf_core::wrap_angle(start.theta + f64::from(k) * step);
+            let pose = Pose2::new(start.x, start.y, theta);
+            let within_reach = scan
+                .placed(&pose)
+                .filter(|(w, _)| reference.nearest(w).is_some())
+                .count();
+            (within_reach, pose)
+        })
+        .collect();
+    // Stable: equals keep their order, nearest turns first.
+    turns.sort_by_key(|&(within_reach, _)| std::cmp::Reverse(within_reach));
+    let mut best: Option<(usize, Alignment)> = None;
+    for (_, pose) in turns.into_iter().take(SWEEP_ALIGNED_TURNS) {
+        let Some(a) = align(reference, scan, pose, params) else {
+            continue;
+        };
+        let fitting = fitting_points(reference, scan, &a.pose, params);
+        if best.as_ref().is_none_or(|(most, _)| fitting > *most) {
+            best = Some((fitting, a));
+        }
+    }
+    best.map(|(_, a)| a)
 }
 
 /// Of two alignments of `scan`, the one whose pose its points fit significantly better
@@ -481,6 +544,34 @@ mod tests {
             &params
         )
         .is_none());
+    }
+
+    #[test]
+    fn a_scan_turned_far_beyond_one_start_s_reach_is_found_by_the_sweep() {
+        let room = walls(&ROOM);
+        let reference = reference(&room);
+        let params = MatchParams::default();
+        // Seen after an unseen turn of 80°: started from the heading before it, the
+        // alignment does not get there.
+        let scan = seen_from(&room, &Pose2::new(2.5, 2.0, 80f64.to_radians()));
+        let start = Pose2::new(2.6, 1.9, 0.0);
+        let from_start = align(&reference, &scan, start, &params);
+        assert!(
+            from_start.is_none_or(|a| angle_diff(a.pose.theta, 80f64.to_radians()).abs() > 0.1),
+            "{from_start:?}"
+        );
+        let swept = align_swept(&reference, &scan, start, 5f64.to_radians(), &params).unwrap();
+        assert!((swept.pose.x - 2.5).abs() < 1e-3, "{:?}", swept.pose);
+        assert!((swept.pose.y - 2.0).abs() < 1e-3, "{:?}", swept.pose);
+        assert!(
+            angle_diff(swept.pose.theta, 80f64.to_radians()).abs() < 1e-4,
+            "{:?}",
+            swept.pose
+        );
+        assert_eq!(
+            fitting_points(&reference, &scan, &swept.pose, &params),
+            scan.len()
+        );
     }
 
     /// An alignment at `pose` (only the pose matters to [`preferred`]).
