@@ -3,6 +3,7 @@
 # cargo-fuzz) for SECONDS each, and prints how many inputs each ran.
 #
 #   scripts/fuzz.sh [SECONDS] [TARGET...]      default: 60 s, every target
+#   EKF_FUZZ_SANITIZER=none scripts/fuzz.sh    without AddressSanitizer (see below)
 #
 # Installs what it needs: the nightly toolchain (libFuzzer needs its sanitizer support)
 # and cargo-fuzz. Each target starts from its seeds (fuzz/seeds/TARGET, made from the
@@ -41,8 +42,12 @@ if [ -z "${targets[*]}" ]; then
     exit 1
 fi
 
-# One build for all targets (release with debug assertions, so overflow is a crash too).
-cargo +nightly fuzz build --debug-assertions
+# One build for all targets: release with debug assertions (so overflow is a crash too),
+# instrumented by the sanitizer EKF_FUZZ_SANITIZER names (cargo-fuzz's: address, the
+# default, leak, memory, thread or none). `run` gets the same flags, or it builds again.
+sanitizer=${EKF_FUZZ_SANITIZER:-address}
+build_flags=(--debug-assertions --sanitizer "$sanitizer")
+cargo +nightly fuzz build "${build_flags[@]}"
 
 for target in "${targets[@]}"; do
     corpus=fuzz/corpus/$target
@@ -53,7 +58,7 @@ for target in "${targets[@]}"; do
     # Inputs that once crashed the target (fuzz/regressions/TARGET) run first, every time.
     dirs=("$corpus" "fuzz/seeds/$target")
     [ -d "fuzz/regressions/$target" ] && dirs+=("fuzz/regressions/$target")
-    cargo +nightly fuzz run --debug-assertions "$target" "${dirs[@]}" -- \
+    cargo +nightly fuzz run "${build_flags[@]}" "$target" "${dirs[@]}" -- \
         -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 \
         >"$log" 2>&1 || status=$?
     runs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)
@@ -66,4 +71,4 @@ for target in "${targets[@]}"; do
     fi
     rm -f "$log"
 done
-echo "fuzzing: ${#targets[@]} targets, ${seconds}s each, no crash"
+echo "fuzzing: ${#targets[@]} targets, ${seconds}s each, sanitizer $sanitizer, no crash"

@@ -1,7 +1,8 @@
 """Shared fixtures: the `ekf` binary, the bundled real logs, and the bags `ekf` writes from them.
 
-The binary is `$EKF_BIN` if set, else `target/debug/ekf` (scripts/test-all.sh builds it and
-sets EKF_BIN). The real logs live in `shared/data/` beside the repository (CI clones `shared/`
+The binary is `$EKF_BIN` if set, else `target/debug/ekf`; the example `write_sample_bag` is
+the one built beside it (`examples/` in the same folder). scripts/test-all.sh uses the ones
+its `cargo test` stage built and sets EKF_BIN. The real logs live in `shared/data/` beside the repository (CI clones `shared/`
 next to it); tests that need them are skipped, with the reason, only when that folder is
 absent, and fail instead when `EKF_REQUIRE_DATA=1`.
 """
@@ -35,6 +36,18 @@ def ekf_bin():
         pytest.fail(
             f"ekf binary not found at {path}; build it with `cargo build -p ekf-cli --bins` "
             "or point EKF_BIN at it"
+        )
+    return path
+
+
+@pytest.fixture(scope="session")
+def sample_bag_writer(ekf_bin):
+    """The example `write_sample_bag`, built with the `ekf` binary in use."""
+    path = ekf_bin.parent / "examples" / "write_sample_bag"
+    if not path.is_file():
+        pytest.fail(
+            f"example write_sample_bag not found at {path} (beside {ekf_bin}); build it with "
+            "`cargo build -p ekf-cli --bins --examples`"
         )
     return path
 

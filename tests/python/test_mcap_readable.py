@@ -6,29 +6,24 @@ back with the `mcap` and `mcap-ros2-support` Python packages, which decode CDR f
 ros2msg schema text stored in the file. A schema text that does not match our structs, or a
 misaligned field, shows up here as a decode error or a wrong value.
 
-Run: pip install -r tests/python/requirements.txt && python -m pytest tests/python
+Run: cargo build -p ekf-cli --bins --examples &&
+pip install -r tests/python/requirements.txt && python -m pytest tests/python
 """
 
 import math
 import subprocess
-from pathlib import Path
 
 import pytest
 from mcap.reader import make_reader
 from mcap_ros2.reader import read_ros2_messages
 
-ROOT = Path(__file__).resolve().parents[2]
 STAMP_NS = 100 * 10**9 + 250
 
 
 @pytest.fixture(scope="module")
-def bag(tmp_path_factory):
+def bag(tmp_path_factory, sample_bag_writer):
     out = tmp_path_factory.mktemp("bag") / "sample.mcap"
-    subprocess.run(
-        ["cargo", "run", "-q", "-p", "ekf-cli", "--example", "write_sample_bag", "--", str(out)],
-        cwd=ROOT,
-        check=True,
-    )
+    subprocess.run([str(sample_bag_writer), str(out)], check=True)
     return out
 
 
