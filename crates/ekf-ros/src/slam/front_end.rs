@@ -31,12 +31,18 @@ const SAME_START_RAD: f64 = 0.5 * core::f64::consts::PI / 180.0;
 /// "neither fits better" at this probability ([`preferred`]).
 const PREFERENCE_PROBABILITY: f64 = 0.99;
 
-/// After a motion gap the scan is also aligned from the prediction turned by every
-/// multiple of this angle (rad) around the circle: with no odometry the robot may have
-/// turned any amount unseen (seattle: 78° in 3 s), far beyond the alignment's reach of a
-/// few degrees from one start. 5° starts leave at most 2.5° to go, within that reach for
-/// walls up to about 7 m away (`max_distance` 0.3 m).
-const GAP_SWEEP_STEP_RAD: f64 = 5.0 * core::f64::consts::PI / 180.0;
+/// Where the predicted heading is uncertain beyond one alignment's reach, the scan is
+/// also aligned from the prediction turned by multiples of this angle (rad), within the
+/// prediction's [`HEADING_WINDOW_SIGMAS`] σ, or around the circle after a motion gap (with no
+/// odometry the robot may have turned any amount unseen: seattle, 78° in 3 s). 5° starts
+/// leave at most 2.5° to go, within the alignment's reach for walls up to about 7 m away
+/// (`max_distance` 0.3 m).
+const SWEEP_STEP_RAD: f64 = 5.0 * core::f64::consts::PI / 180.0;
+
+/// The heading window searched around the prediction ([`SWEEP_STEP_RAD`]), in its
+/// standard deviations: where a normal error of the heading falls but in 0.3 % of
+/// scans.
+const HEADING_WINDOW_SIGMAS: f64 = 3.0;
 
 /// A scan's pose as the front end had it, and the key scan it follows.
 #[derive(Debug, Clone, Copy)]
@@ -189,11 +195,13 @@ impl FrontEnd {
     /// lines can pull the filter along a corridor (fhw: 0.7 m twice) or onto walls turned
     /// by ten degrees or more at a turn (edmonton: 14° once, out of the matcher's reach),
     /// and the matcher, started there, settles in a local minimum that the prediction's
-    /// start avoids. After a `motion_gap` the robot may have turned unseen: the best of the
-    /// alignments from every [`GAP_SWEEP_STEP_RAD`] turn of the prediction
-    /// ([`align_swept`]) is kept instead if the points prefer it the same way (seattle:
-    /// aligned RMSE 2.65 m → 0.045 m; the five other logs mapped in docs/maps.md have no
-    /// motion gap).
+    /// start avoids. A turn can leave the predicted heading uncertain by more than the
+    /// matcher reaches (csail's odometry errs by up to 17° on a 60° turn), and after a
+    /// `motion_gap` the robot may have turned any amount unseen: then the best of the
+    /// alignments from every [`SWEEP_STEP_RAD`] turn of the prediction within
+    /// [`HEADING_WINDOW_SIGMAS`] of its heading's σ, or around the circle after a gap
+    /// ([`align_swept`]), is kept instead if the points prefer it the same way (aligned
+    /// RMSE: csail 0.474 → 0.148 m, seattle 2.65 → 0.045 m; docs/maps.md).
     fn align_from(
         &self,
         points: &ScanPoints,
@@ -203,14 +211,22 @@ impl FrontEnd {
     ) -> Option<Alignment> {
         let params = &self.params.scan_match;
         let tracked = self.align_tracked(points, fused, predicted);
-        let Some(predicted) = predicted.filter(|_| motion_gap) else {
+        let Some(predicted) = predicted else {
             return tracked;
         };
+        let reach = match motion_gap {
+            true => core::f64::consts::PI,
+            false => HEADING_WINDOW_SIGMAS * predicted.covariance[(2, 2)].max(0.0).sqrt(),
+        };
+        if reach < SWEEP_STEP_RAD {
+            return tracked;
+        }
         let swept = align_swept(
             &self.cloud,
             points,
             predicted.pose,
-            GAP_SWEEP_STEP_RAD,
+            SWEEP_STEP_RAD,
+            reach,
             params,
         );
         match (tracked, swept) {

@@ -301,24 +301,30 @@ fn fitting_points(
 /// the scan's points have a reference point within reach before any alignment.
 const SWEEP_ALIGNED_TURNS: usize = 3;
 
-/// The alignment of `scan` from `start` turned by a multiple of `step` (rad) around the
-/// circle (`+step`, `−step`, `+2·step`, ...; `start` itself is not tried), for a scan
-/// whose heading is unknown (after a motion gap), where one start reaches only a few
-/// degrees. Coarse to fine: every turn is scored by how many of the scan's points have a
-/// reference point within `max_distance` there, the [`SWEEP_ALIGNED_TURNS`] best (the
-/// first of equals) are aligned, and of those alignments the one with the most
-/// [`fitting_points`] wins.
+/// The alignment of `scan` from `start` turned by a multiple of `step` (rad) up to
+/// `reach` (rad; `π` or more: around the circle) each way (`+step`, `−step`, `+2·step`,
+/// ...; `start` itself is not tried), for a scan whose heading is known only that well,
+/// where one start reaches a few degrees. Coarse to fine: every turn is scored by how many
+/// of the scan's points have a reference point within `max_distance` there, the
+/// [`SWEEP_ALIGNED_TURNS`] best (the first of equals) are aligned, and of those
+/// alignments the one with the most [`fitting_points`] wins. `None` if `reach` is less
+/// than `step` or no alignment succeeds.
 pub fn align_swept(
     reference: &ReferenceCloud,
     scan: &ScanPoints,
     start: Pose2<f64>,
     step: f64,
+    reach: f64,
     params: &MatchParams,
 ) -> Option<Alignment> {
-    let steps = (core::f64::consts::PI / step).round().max(1.0) as i32;
+    if scan.is_empty() || reference.len() == 0 {
+        return None;
+    }
+    let half_turn = (core::f64::consts::PI / step).round().max(1.0) as i32;
+    let steps = ((reach.min(core::f64::consts::PI) / step).floor() as i32).min(half_turn);
     let mut turns: Vec<(usize, Pose2<f64>)> = (1..=steps)
         .flat_map(|k| [k, -k])
-        .filter(|&k| k != -steps)
+        .filter(|&k| k != -half_turn)
         .map(|k| {
             let theta = ekf_core::wrap_angle(start.theta + f64::from(k) * step);
             let pose = Pose2::new(start.x, start.y, theta);
@@ -560,7 +566,15 @@ mod tests {
             from_start.is_none_or(|a| angle_diff(a.pose.theta, 80f64.to_radians()).abs() > 0.1),
             "{from_start:?}"
         );
-        let swept = align_swept(&reference, &scan, start, 5f64.to_radians(), &params).unwrap();
+        let step = 5f64.to_radians();
+        // Within 30° of the start, the turn is not found.
+        let near = align_swept(&reference, &scan, start, step, 30f64.to_radians(), &params);
+        assert!(
+            near.is_none_or(|a| angle_diff(a.pose.theta, 80f64.to_radians()).abs() > 0.1),
+            "{near:?}"
+        );
+        let swept =
+            align_swept(&reference, &scan, start, step, 90f64.to_radians(), &params).unwrap();
         assert!((swept.pose.x - 2.5).abs() < 1e-3, "{:?}", swept.pose);
         assert!((swept.pose.y - 2.0).abs() < 1e-3, "{:?}", swept.pose);
         assert!(
@@ -572,6 +586,9 @@ mod tests {
             fitting_points(&reference, &scan, &swept.pose, &params),
             scan.len()
         );
+        // Nothing to align to.
+        let empty = ReferenceCloud::default();
+        assert!(align_swept(&empty, &scan, start, step, 90f64.to_radians(), &params).is_none());
     }
 
     /// An alignment at `pose` (only the pose matters to [`preferred`]).
