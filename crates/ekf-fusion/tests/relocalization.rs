@@ -240,18 +240,25 @@ fn scan_outcome(fuser: &mut Fuser, t_ns: u64, input: &Input) -> ekf_fusion::Scan
     }
 }
 
-#[test]
-fn after_a_motion_gap_one_scans_answer_stays_unconfirmed_until_a_tracked_scan_fixes_it() {
-    const MS: u64 = 1_000_000;
+/// A laser-only fuser with `tracking`, started at (1.5, 1.5, 0) (σ 0.1 m, 0.03 rad) in
+/// the L room's map; the room's walls and that pose.
+fn laser_fuser_in_the_l_room(tracking: Tracking) -> (Fuser, Vec<Wall>, Pose2<f64>) {
     let config = FusionConfig {
         mode: Mode::Laser,
-        tracking: Tracking::FromInitialPose,
+        tracking,
         ..FusionConfig::default()
     };
     let room = l_room();
     let a = Pose2::new(1.5, 1.5, 0.0);
     let p0 = Matrix3::from_diagonal(&Vector3::new(0.01, 0.01, 0.001));
-    let mut fuser = Fuser::new(&config, a, p0, 0, Some(map_of(&room))).unwrap();
+    let fuser = Fuser::new(&config, a, p0, 0, Some(map_of(&room))).unwrap();
+    (fuser, room, a)
+}
+
+#[test]
+fn after_a_motion_gap_one_scans_answer_stays_unconfirmed_until_a_tracked_scan_fixes_it() {
+    const MS: u64 = 1_000_000;
+    let (mut fuser, room, a) = laser_fuser_in_the_l_room(Tracking::FromInitialPose);
     // The robot's own odometry stands still throughout: it is carried, not driven.
     let odometry = Input::OdometryPose(Pose2::new(0.0, 0.0, 0.0));
     let mut t = 0;
@@ -300,15 +307,7 @@ fn after_a_motion_gap_one_scans_answer_stays_unconfirmed_until_a_tracked_scan_fi
 #[test]
 fn a_motion_gap_is_reported_with_loss_detection_off() {
     const MS: u64 = 1_000_000;
-    let config = FusionConfig {
-        mode: Mode::Laser,
-        tracking: Tracking::Off,
-        ..FusionConfig::default()
-    };
-    let room = l_room();
-    let a = Pose2::new(1.5, 1.5, 0.0);
-    let p0 = Matrix3::from_diagonal(&Vector3::new(0.01, 0.01, 0.001));
-    let mut fuser = Fuser::new(&config, a, p0, 0, Some(map_of(&room))).unwrap();
+    let (mut fuser, room, a) = laser_fuser_in_the_l_room(Tracking::Off);
     let odometry = Input::OdometryPose(Pose2::new(0.0, 0.0, 0.0));
     let mut t = 0;
     let mut gaps = Vec::new();
