@@ -2,9 +2,9 @@
 
 The binary is `$EKF_BIN` if set, else `target/debug/ekf`; the example `write_sample_bag` is
 the one built beside it (`examples/` in the same folder). scripts/test-all.sh uses the ones
-its `cargo test` stage built and sets EKF_BIN. The real logs live in `shared/data/` beside the repository (CI clones `shared/`
-next to it); tests that need them are skipped, with the reason, only when that folder is
-absent, and fail instead when `EKF_REQUIRE_DATA=1`.
+its `cargo test` stage built and sets EKF_BIN. The real logs live in `shared/data/` beside
+the repository (CI clones `shared/` next to it); tests that need them are skipped, with the
+reason, only when that folder is absent, and fail instead when `EKF_REQUIRE_DATA=1`.
 """
 
 import json

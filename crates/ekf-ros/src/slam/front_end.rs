@@ -33,10 +33,10 @@ const PREFERENCE_PROBABILITY: f64 = 0.99;
 
 /// Where the predicted heading is uncertain beyond one alignment's reach, the scan is
 /// also aligned from the prediction turned by multiples of this angle (rad), within the
-/// prediction's [`HEADING_WINDOW_SIGMAS`] σ, or around the circle after a motion gap (with no
-/// odometry the robot may have turned any amount unseen: seattle, 78° in 3 s). 5° starts
-/// leave at most 2.5° to go, within the alignment's reach for walls up to about 7 m away
-/// (`max_distance` 0.3 m).
+/// prediction's [`HEADING_WINDOW_SIGMAS`] σ, or around the circle after a motion gap
+/// (with no odometry the robot may have turned any amount unseen: seattle, 78° in 3 s).
+/// 5° starts leave at most 2.5° to go, within the alignment's reach for walls up to about
+/// 7 m away (`max_distance` 0.3 m).
 const SWEEP_STEP_RAD: f64 = 5.0 * core::f64::consts::PI / 180.0;
 
 /// The heading window searched around the prediction ([`SWEEP_STEP_RAD`]), in its
