@@ -189,15 +189,19 @@ impl<'a> Walls<'a> {
         self.candidates
             .iter()
             .map(|&i| &map.segments[i])
-            .filter(|s| {
-                let d = angle_diff(s.line.beta, beta).abs();
-                d.min(std::f64::consts::PI - d) <= max_angle
-            })
+            .filter(|s| directions_within(s.line.beta, beta, max_angle))
             .map(|s| (s, s.distance_to(p)))
             .filter(|(_, d)| *d <= max_distance)
             .min_by(|a, b| a.1.total_cmp(&b.1))
             .map(|(s, _)| s)
     }
+}
+
+/// Whether two walls' directions `a` and `b` (rad) are within `max_angle` of each other,
+/// either way round (a wall's direction and its opposite are the same wall).
+fn directions_within(a: f64, b: f64, max_angle: f64) -> bool {
+    let d = angle_diff(a, b).abs();
+    d.min(std::f64::consts::PI - d) <= max_angle
 }
 
 /// The middles and lengths of the pieces, at most `step` long, a wall is cut into.
@@ -260,10 +264,7 @@ mod tests {
                 let full = map
                     .segments
                     .iter()
-                    .filter(|s| {
-                        let d = angle_diff(s.line.beta, beta).abs();
-                        d.min(std::f64::consts::PI - d) <= angle
-                    })
+                    .filter(|s| directions_within(s.line.beta, beta, angle))
                     .map(|s| (s, s.distance_to(&p)))
                     .filter(|(_, d)| *d <= reach)
                     .min_by(|a, b| a.1.total_cmp(&b.1))

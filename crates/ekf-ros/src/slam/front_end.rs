@@ -218,9 +218,7 @@ impl FrontEnd {
             true => core::f64::consts::PI,
             false => HEADING_WINDOW_SIGMAS * predicted.covariance[(2, 2)].max(0.0).sqrt(),
         };
-        if reach < SWEEP_STEP_RAD {
-            return tracked;
-        }
+        // No turn is tried where `reach` is under one step.
         let swept = align_swept(
             &self.cloud,
             points,
