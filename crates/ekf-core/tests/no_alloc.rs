@@ -1,37 +1,14 @@
 //! A predict + update loop performs zero heap allocations (counted by a global allocator).
 
-use core::sync::atomic::{AtomicUsize, Ordering};
 use ekf_core::{
     ChiSquareGate, Compass, DiffDrive, Ekf, LaserLine, Line, Motion, OdometryNoise, Pose2,
     WheelNoise, WheelSpeeds,
 };
 use nalgebra::{Matrix2, Matrix3};
-use std::alloc::{GlobalAlloc, Layout, System};
 
-struct Counting;
-static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
+mod alloc_support;
 
-// SAFETY: forwards to the system allocator unchanged; only counts calls.
-#[allow(unsafe_code)]
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
-        // SAFETY: same contract as the caller's.
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        // SAFETY: same contract as the caller's.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
-        // SAFETY: same contract as the caller's.
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
-
-#[global_allocator]
-static GLOBAL: Counting = Counting;
+use alloc_support::allocations;
 
 #[test]
 fn predict_update_loop_does_not_allocate() {
@@ -44,7 +21,7 @@ fn predict_update_loop_does_not_allocate() {
     let mount = Pose2::new(0.1, 0.0, -core::f64::consts::FRAC_PI_2);
     let mut ekf = Ekf::new(Pose2::identity(), Matrix3::from_diagonal_element(1e-3)).unwrap();
 
-    let before = ALLOCATIONS.load(Ordering::SeqCst);
+    let before = allocations();
     let mut accepted = 0;
     for k in 0..1000 {
         ekf.predict_wheels(&robot, &WheelSpeeds::new(1.0, 1.1, 0.1).unwrap(), &noise)
@@ -60,7 +37,7 @@ fn predict_update_loop_does_not_allocate() {
         let reported = ekf.update_reporting(&m, Some(&gate2)).unwrap();
         accepted += usize::from(reported.outcome.accepted);
     }
-    let after = ALLOCATIONS.load(Ordering::SeqCst);
+    let after = allocations();
     assert_eq!(
         after - before,
         0,

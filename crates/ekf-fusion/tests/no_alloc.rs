@@ -3,36 +3,14 @@
 //! make no heap allocation (counted by a global allocator). The inputs themselves are
 //! made beforehand, as a driver that reuses its scan buffers would.
 
-use core::sync::atomic::{AtomicUsize, Ordering};
 use ekf_core::Pose2;
 use ekf_fusion::{Fused, Fuser, FusionConfig, Input, Scan, TimedLocalizer};
 use nalgebra::Matrix3;
-use std::alloc::{GlobalAlloc, Layout, System};
 
-struct Counting;
-static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
+#[path = "../../ekf-core/tests/alloc_support/mod.rs"]
+mod alloc_support;
 
-// SAFETY: forwards to the system allocator unchanged; only counts calls.
-#[allow(unsafe_code)]
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
-        // SAFETY: same contract as the caller's.
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        // SAFETY: same contract as the caller's.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
-        // SAFETY: same contract as the caller's.
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
-
-#[global_allocator]
-static GLOBAL: Counting = Counting;
+use alloc_support::allocations;
 
 const MS: u64 = 1_000_000;
 const WHEEL_RADIUS: f64 = 0.05;
@@ -132,7 +110,7 @@ fn once_warm_pushing_fusing_and_the_pose_now_do_not_allocate() {
         fused_lines += fused(&mut loc);
     }
     let warm_lines = fused_lines;
-    let before = ALLOCATIONS.load(Ordering::SeqCst);
+    let before = allocations();
     let mut predicted_ahead = 0;
     for (_, stamp, input) in rest {
         loc.push(stamp, input, ()).unwrap();
@@ -140,7 +118,7 @@ fn once_warm_pushing_fusing_and_the_pose_now_do_not_allocate() {
         let now = loc.pose_now([]).unwrap().unwrap();
         predicted_ahead += usize::from(now.t_ns > now.fused_ns);
     }
-    let allocations = ALLOCATIONS.load(Ordering::SeqCst) - before;
+    let allocations = allocations() - before;
     assert_eq!(allocations, 0, "allocations after warm-up");
     assert!(
         warm_lines > 0 && fused_lines > warm_lines + 200,

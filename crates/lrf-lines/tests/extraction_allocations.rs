@@ -2,6 +2,7 @@
 //! sees no allocation while the same extractor and output buffer process more scans.
 //! (One test in this binary, so no other test allocates meanwhile.)
 
+#[path = "../../ekf-core/tests/alloc_support/mod.rs"]
 mod alloc_support;
 mod extraction_support;
 

@@ -1,5 +1,6 @@
 //! A Localizer step (predict, compass, scan) does not allocate once its buffers have grown.
 
+#[path = "../../ekf-core/tests/alloc_support/mod.rs"]
 mod alloc_support;
 mod localizer_sim;
 mod matching_support;

@@ -1,5 +1,6 @@
 //! Matching does not allocate once its reusable result has grown to size.
 
+#[path = "../../ekf-core/tests/alloc_support/mod.rs"]
 mod alloc_support;
 mod matching_support;
 

@@ -1,5 +1,6 @@
-//! A counting global allocator for the tests that prove a step does not allocate. A test
-//! binary that declares `mod alloc_support;` allocates through it. Allocations are counted
+//! A counting global allocator for the tests that prove a step does not allocate, in
+//! ekf-core, ekf-fusion and lrf-lines (the latter two include this file by `#[path]`). A
+//! test binary that declares `mod alloc_support;` allocates through it. Allocations are counted
 //! per thread: the test harness's own threads allocate when they please (more so on a
 //! busy machine), and must not count against the step under test.
 #![allow(unsafe_code)]
