@@ -28,7 +28,9 @@ pub struct SlamParams {
     pub loop_radius: f64,
     /// See `loop_radius` (m per m driven).
     pub loop_drift: f64,
-    /// See `loop_radius` (m).
+    /// See `loop_radius` (m). A bound on the search's cost, not its safety: a closure far
+    /// from where the graph has the robot is refused by the graph's consistency test
+    /// (freiburg-campus, outdoors, needs more than 20 m after its long loops).
     pub loop_max_radius: f64,
     /// Largest heading correction (rad) a loop closure may make.
     pub loop_max_turn: f64,
@@ -88,7 +90,7 @@ impl Default for SlamParams {
             loop_min_path: 15.0,
             loop_radius: 1.0,
             loop_drift: 0.1,
-            loop_max_radius: 10.0,
+            loop_max_radius: 50.0,
             loop_max_turn: 20f64.to_radians(),
             loop_cooldown_path: 2.0,
             chain_path: 3.0,

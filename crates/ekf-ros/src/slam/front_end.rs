@@ -10,7 +10,9 @@ use super::key_scans::{KeyScan, KeyScans};
 use super::loop_closure::{LoopClosures, Outcome};
 use super::pose_graph::{relative, Edge, PoseGraph};
 use super::rematch::rematch;
-use super::scan_match::{align, align_swept, preferred, Alignment, ReferenceCloud, ScanPoints};
+use super::scan_match::{
+    align, align_swept, preference_bound, preferred, Alignment, ReferenceCloud, ScanPoints,
+};
 use super::SlamParams;
 use crate::replay::{ReplayError, ScanHook};
 use ekf_core::{angle_diff, Pose2};
@@ -26,10 +28,6 @@ const SURPRISE_PROBABILITY: f64 = 0.99;
 const SAME_START_M: f64 = 0.01;
 /// See [`SAME_START_M`].
 const SAME_START_RAD: f64 = 0.5 * core::f64::consts::PI / 180.0;
-
-/// Of two alignments of a scan, the points choose one only if McNemar's test rejects
-/// "neither fits better" at this probability ([`preferred`]).
-const PREFERENCE_PROBABILITY: f64 = 0.99;
 
 /// Where the predicted heading is uncertain beyond one alignment's reach, the scan is
 /// also aligned from the prediction turned by multiples of this angle (rad), within the
@@ -81,8 +79,6 @@ pub struct FrontEnd {
     pub(super) aligned: u64,
     /// Whether each scan's points are aligned to the local map's (without a compass).
     align_scans: bool,
-    /// `χ²₁(PREFERENCE_PROBABILITY)`.
-    preference_bound: f64,
 }
 
 impl FrontEnd {
@@ -97,10 +93,6 @@ impl FrontEnd {
     pub fn new(params: SlamParams, localizer: LocalizerConfig, align_scans: bool) -> Self {
         Self {
             align_scans,
-            // A probability in (0, 1) and one degree of freedom always have a quantile; an
-            // infinite bound would leave every choice to the motion.
-            preference_bound: ekf_core::chi_square_quantile(PREFERENCE_PROBABILITY, 1)
-                .unwrap_or(f64::INFINITY),
             mount: localizer.laser_mount,
             keys: KeyScans::new(params.map_builder),
             graph: PoseGraph::new(),
@@ -191,7 +183,8 @@ impl FrontEnd {
     /// The scan's points aligned to the local map's ([`align`]) from the filter's pose
     /// and, when the scan's lines moved the filter by more than [`SAME_START_M`] or
     /// [`SAME_START_RAD`], from the pose predicted before them; of two alignments, the
-    /// [`preferred`] one (McNemar's test at [`PREFERENCE_PROBABILITY`]). A scan's few
+    /// [`preferred`] one (McNemar's test at
+    /// [`PREFERENCE_PROBABILITY`](super::scan_match::PREFERENCE_PROBABILITY)). A scan's few
     /// lines can pull the filter along a corridor (fhw: 0.7 m twice) or onto walls turned
     /// by ten degrees or more at a turn (edmonton: 14° once, out of the matcher's reach),
     /// and the matcher, started there, settles in a local minimum that the prediction's
@@ -234,7 +227,7 @@ impl FrontEnd {
                 (t, s),
                 predicted,
                 params,
-                self.preference_bound,
+                preference_bound(),
             )),
             (t, s) => t.or(s),
         }
@@ -267,7 +260,7 @@ impl FrontEnd {
             (f, p),
             predicted,
             params,
-            self.preference_bound,
+            preference_bound(),
         ))
     }
 
@@ -362,7 +355,7 @@ impl ScanHook for FrontEnd {
                     .map_err(slam_error)?;
             }
         }
-        if let Outcome::Closed(edges) = self.loops.check(&self.keys, self.graph.poses(), k) {
+        if let Outcome::Closed(edges) = self.loops.check(&self.keys, &self.graph, k) {
             // A closure the graph already agrees with (its edges' cost within the
             // chi-square bound) changes nothing now: it joins the final optimisation.
             let surprise: f64 = edges.iter().map(|e| self.graph.edge_cost(e)).sum();

@@ -4,7 +4,7 @@
 //! after it fit the same correction ([`LoopClosures`]).
 
 use super::key_scans::KeyScans;
-use super::pose_graph::{relative, Edge};
+use super::pose_graph::{relative, Edge, PoseGraph};
 use super::scan_match::{align, ReferenceCloud};
 use super::SlamParams;
 use ekf_core::{angle_diff, Pose2};
@@ -37,9 +37,19 @@ pub struct LoopCounts {
     pub hypotheses: u64,
     /// Hypotheses that the key scans after them did not confirm.
     pub refuted: u64,
+    /// Confirmed closures that the graph refused: farther from where its other edges put
+    /// the robot than their uncertainty allows ([`PoseGraph::consistency`]).
+    pub inconsistent: u64,
     /// Loop closures added to the graph.
     pub closures: u64,
 }
+
+/// A confirmed closure whose edges are not all within `χ²₃` at this probability of the
+/// graph ([`PoseGraph::consistency`]) is refused. On infinite-corridor the refused
+/// closures were 88 and 108 (`χ²₃(0.999)` is 16.3), a corridor matched 3–4 m along
+/// itself; the true closures there are all below 16. At 0.99 (11.3) a true closure of
+/// freiburg-campus, outdoors, is refused.
+const CONSISTENCY_PROBABILITY: f64 = 0.999;
 
 /// The search, the verification of its hypotheses and their counts.
 #[derive(Debug)]
@@ -88,7 +98,8 @@ impl LoopClosures {
 
     /// Checks the newest key scan `k` (graph poses in `poses`): confirms or refutes a
     /// pending hypothesis, or searches for a new one.
-    pub fn check(&mut self, keys: &KeyScans, poses: &[Pose2<f64>], k: usize) -> Outcome {
+    pub fn check(&mut self, keys: &KeyScans, graph: &PoseGraph, k: usize) -> Outcome {
+        let poses = graph.poses();
         if let Some(mut pending) = self.pending.take() {
             let predicted = pending.correction.compose(&poses[k]);
             let confirmed = self
@@ -109,9 +120,7 @@ impl LoopClosures {
                 self.pending = Some(pending);
                 return Outcome::Nothing;
             }
-            self.counts.closures += 1;
-            self.last_closure_path = keys.get(k).path;
-            return Outcome::Closed(pending.edges);
+            return self.conclude(graph, pending.edges, keys.get(k).path);
         }
         let path = keys.get(k).path;
         if path - self.last_closure_path < self.params.loop_cooldown_path {
@@ -181,9 +190,7 @@ impl LoopClosures {
         self.counts.hypotheses += 1;
         let first = edge(anchor, k, &poses[anchor], &pose, information);
         if self.params.verify_key_scans == 0 {
-            self.counts.closures += 1;
-            self.last_closure_path = path;
-            return Outcome::Closed(vec![first]);
+            return self.conclude(graph, vec![first], path);
         }
         self.pending = Some(Pending {
             anchor,
@@ -193,6 +200,27 @@ impl LoopClosures {
             cloud,
         });
         Outcome::Nothing
+    }
+
+    /// A confirmed closure (`edges`, found at path length `path`): added if every edge is
+    /// consistent with the graph ([`CONSISTENCY_PROBABILITY`]), else refused. A wrong
+    /// closure that passed the search's ambiguity test and its confirmations (the next key
+    /// scans in the same corridor find the same wrong door) is still far from where the
+    /// odometry and the other closures put the robot.
+    fn conclude(&mut self, graph: &PoseGraph, edges: Vec<Edge>, path: f64) -> Outcome {
+        // Three degrees of freedom and a probability in (0, 1) always have a quantile.
+        let bound =
+            ekf_core::chi_square_quantile(CONSISTENCY_PROBABILITY, 3).unwrap_or(f64::INFINITY);
+        let consistent = edges
+            .iter()
+            .all(|e| graph.consistency(e).is_ok_and(|chi2| chi2 <= bound));
+        if !consistent {
+            self.counts.inconsistent += 1;
+            return Outcome::Nothing;
+        }
+        self.counts.closures += 1;
+        self.last_closure_path = path;
+        Outcome::Closed(edges)
     }
 
     /// The pose of key scan `k` in the submap (`submap`, its points `cloud`) from

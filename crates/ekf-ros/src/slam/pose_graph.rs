@@ -202,13 +202,31 @@ impl PoseGraph {
         Ok(report)
     }
 
-    /// One step: solves `H Δ = −b`, `H = Σ Jᵀ w Ω J`, `b = Σ Jᵀ w Ω e`, over the poses
-    /// after the first (the lower triangle of `H` assembled; `symbolic` is its symbolic
-    /// factorisation, made on the first call).
+    /// One step: solves `H Δ = −b` ([`normal_equations`](Self::normal_equations));
+    /// `symbolic` is the symbolic factorisation of `H`, made on the first call.
     fn gauss_newton_step(
         &self,
         symbolic: &mut Option<SymbolicLlt<usize>>,
     ) -> Result<Vec<f64>, GraphError> {
+        let (h, b) = self.normal_equations()?;
+        let pattern = match symbolic {
+            Some(pattern) => pattern.clone(),
+            None => symbolic.insert(symbolic_factor(&h)?).clone(),
+        };
+        let llt = Llt::try_new_with_symbolic(pattern, h.as_ref(), Side::Lower)
+            .map_err(|_| GraphError::Singular)?;
+        let rhs = Mat::from_fn(b.len(), 1, |i, _| -b[i]);
+        let x = llt.solve(&rhs);
+        let step: Vec<f64> = (0..b.len()).map(|i| x[(i, 0)]).collect();
+        if step.iter().any(|s| !s.is_finite()) {
+            return Err(GraphError::Singular);
+        }
+        Ok(step)
+    }
+
+    /// The normal equations at the current poses over the poses after the first:
+    /// `H = Σ Jᵀ w Ω J` (its lower triangle) and `b = Σ Jᵀ w Ω e`, `w` the Huber weight.
+    fn normal_equations(&self) -> Result<(SparseColMat<usize, f64>, Vec<f64>), GraphError> {
         let n = 3 * (self.poses.len() - 1);
         let mut triplets = Vec::with_capacity(36 * self.edges.len() + n);
         let mut b = vec![0.0; n];
@@ -249,24 +267,68 @@ impl PoseGraph {
         }
         let h = SparseColMat::<usize, f64>::try_new_from_triplets(n, n, &triplets)
             .map_err(|_| GraphError::Singular)?;
-        let pattern = match symbolic {
-            Some(pattern) => pattern.clone(),
-            None => {
-                let pattern = SymbolicLlt::try_new(h.symbolic(), Side::Lower)
-                    .map_err(|_| GraphError::Singular)?;
-                symbolic.insert(pattern).clone()
-            }
-        };
-        let llt = Llt::try_new_with_symbolic(pattern, h.as_ref(), Side::Lower)
-            .map_err(|_| GraphError::Singular)?;
-        let rhs = Mat::from_fn(n, 1, |i, _| -b[i]);
-        let x = llt.solve(&rhs);
-        let step: Vec<f64> = (0..n).map(|i| x[(i, 0)]).collect();
-        if step.iter().any(|s| !s.is_finite()) {
-            return Err(GraphError::Singular);
-        }
-        Ok(step)
+        Ok((h, b))
     }
+
+    /// How far `edge` (not in the graph) is from what the graph says, in its standard
+    /// deviations: `eᵀ S⁻¹ e`, `e` its residual at the current poses and
+    /// `S = J Σ Jᵀ + Ω⁻¹`, `Σ` the joint covariance of its two poses in the graph (the
+    /// blocks of `H⁻¹` at the current poses, the first pose exact) and `J` the residual's
+    /// Jacobian. About `χ²₃` if the edge measures the same poses as the graph's edges do;
+    /// a loop closure far beyond that puts the robot where the graph's measurements
+    /// cannot have it (a corridor's door matched to the next door). A direction the edge
+    /// does not measure (an eigenvalue of `Ω` below `10⁻¹²` of its largest) does not count.
+    pub fn consistency(&self, edge: &Edge) -> Result<f64, GraphError> {
+        let nodes = self.poses.len();
+        let (from, to) = (edge.from, edge.to);
+        if from >= nodes || to >= nodes || from == to {
+            return Err(GraphError::NoSuchNode { from, to, nodes });
+        }
+        let (pi, pj) = (&self.poses[from], &self.poses[to]);
+        let r = residual(edge, pi, pj);
+        let (ji, jj) = jacobians(edge, pi, pj);
+        let (h, _) = self.normal_equations()?;
+        let llt = Llt::try_new_with_symbolic(symbolic_factor(&h)?, h.as_ref(), Side::Lower)
+            .map_err(|_| GraphError::Singular)?;
+        // The columns of H⁻¹ of the edge's two poses (none for the fixed first pose).
+        let columns = |node: usize| node.checked_sub(1).map(|k| 3 * k);
+        let blocks = [(columns(from), ji), (columns(to), jj)];
+        let rhs = Mat::from_fn(h.nrows(), 6, |row, col| {
+            let start = blocks[col / 3].0;
+            f64::from(start.is_some_and(|k| row == k + col % 3))
+        });
+        let inverse = llt.solve(&rhs);
+        // J Σ Jᵀ over the two poses' blocks; Σ's block (a, c) is rows `ka..` of column
+        // block `c`.
+        let mut s = Matrix3::zeros();
+        for (ka, ja) in blocks.iter().filter_map(|(k, j)| k.map(|k| (k, j))) {
+            for (c, (_, jc)) in blocks.iter().enumerate() {
+                let sigma = Matrix3::from_fn(|row, col| inverse[(ka + row, 3 * c + col)]);
+                s += ja * sigma * jc.transpose();
+            }
+        }
+        let eigen = edge.information.symmetric_eigen();
+        let floor = eigen.eigenvalues.max() * 1e-12;
+        let variances = eigen.eigenvalues.map(|v| 1.0 / v.max(floor));
+        s += eigen.eigenvectors
+            * Matrix3::from_diagonal(&variances)
+            * eigen.eigenvectors.transpose();
+        let s = 0.5 * (s + s.transpose());
+        let chi2 = s
+            .cholesky()
+            .map(|c| r.dot(&c.solve(&r)))
+            .ok_or(GraphError::Singular)?;
+        match chi2.is_finite() {
+            true => Ok(chi2),
+            false => Err(GraphError::Singular),
+        }
+    }
+}
+
+/// The symbolic Cholesky factorisation of `h` (lower triangle), with faer's
+/// fill-reducing ordering.
+fn symbolic_factor(h: &SparseColMat<usize, f64>) -> Result<SymbolicLlt<usize>, GraphError> {
+    SymbolicLlt::try_new(h.symbolic(), Side::Lower).map_err(|_| GraphError::Singular)
 }
 
 /// The Huber weight of an edge with cost `c = eᵀ Ω e` (1 for a plain edge).
@@ -389,6 +451,63 @@ mod tests {
 
     /// A square driven with odometry that turns 2° too little per corner: the loop
     /// closure back to the start pulls every corner onto the true square.
+    /// A straight chain of `n` steps of 1 m along x, each `σ = (0.05 m, 0.05 m, 0.01 rad)`,
+    /// its poses exact.
+    fn straight_chain(n: usize) -> PoseGraph {
+        let mut graph = PoseGraph::new();
+        for i in 0..=n {
+            graph.add_node(Pose2::new(i as f64, 0.0, 0.0));
+        }
+        for i in 0..n {
+            let step = edge(i, i + 1, Pose2::new(1.0, 0.0, 0.0), [0.05, 0.05, 0.01]);
+            graph.add_edge(step).unwrap();
+        }
+        graph
+    }
+
+    #[test]
+    fn a_closure_is_judged_by_the_graph_s_uncertainty_between_its_poses() {
+        // Along a straight chain the position along it is the sum of the steps' errors,
+        // independent of the heading's (to first order): a closure from node a to node b
+        // measured `d` longer than the chain has χ² = d² / ((b − a) σ² + σ_c²) exactly.
+        let graph = straight_chain(10);
+        let sc = 0.02;
+        for (a, b, d) in [(0, 10, 0.3), (2, 7, -0.2), (3, 4, 0.05), (0, 10, 0.0)] {
+            let closure = edge(
+                a,
+                b,
+                Pose2::new((b - a) as f64 + d, 0.0, 0.0),
+                [sc, sc, 0.005],
+            );
+            let expected = d * d / ((b - a) as f64 * 0.05f64.powi(2) + sc * sc);
+            let chi2 = graph.consistency(&closure).unwrap();
+            assert!(
+                (chi2 - expected).abs() <= 1e-6 * expected.max(1.0),
+                "{a} → {b}, {d} m: {chi2} against {expected}"
+            );
+        }
+        // Far beyond the uncertainty: 1 m over 5 steps of 5 cm is 8.8σ.
+        let far = edge(2, 7, Pose2::new(6.0, 0.0, 0.0), [sc, sc, 0.005]);
+        assert!(graph.consistency(&far).unwrap() > 70.0);
+    }
+
+    #[test]
+    fn a_direction_a_closure_does_not_measure_does_not_count() {
+        // A closure that sees only across the chain (a corridor's walls) says nothing of
+        // the position along it, however far off that is.
+        let graph = straight_chain(6);
+        let mut across = edge(0, 6, Pose2::new(9.0, 0.0, 0.0), [0.02, 0.02, 0.005]);
+        across.information[(0, 0)] = 0.0;
+        assert!(graph.consistency(&across).unwrap() < 1e-6);
+        across.measured.y = 0.5;
+        assert!(graph.consistency(&across).unwrap() > 1.0);
+        let missing = edge(0, 9, Pose2::new(9.0, 0.0, 0.0), [0.02, 0.02, 0.005]);
+        assert!(matches!(
+            graph.consistency(&missing),
+            Err(GraphError::NoSuchNode { .. })
+        ));
+    }
+
     #[test]
     fn a_loop_closure_corrects_the_drift_of_a_square() {
         let side = 10.0;
