@@ -212,9 +212,9 @@ impl LoopClosures {
         // Three degrees of freedom and a probability in (0, 1) always have a quantile.
         let bound =
             ekf_core::chi_square_quantile(CONSISTENCY_PROBABILITY, 3).unwrap_or(f64::INFINITY);
-        let consistent = edges
-            .iter()
-            .all(|e| graph.consistency(e).is_ok_and(|chi2| chi2 <= bound));
+        let consistent = graph
+            .consistency(&edges)
+            .is_ok_and(|chi2| chi2.iter().all(|&c| c <= bound));
         if !consistent {
             self.counts.inconsistent += 1;
             return Outcome::Nothing;

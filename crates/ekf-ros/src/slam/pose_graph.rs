@@ -270,58 +270,76 @@ impl PoseGraph {
         Ok((h, b))
     }
 
-    /// How far `edge` (not in the graph) is from what the graph says, in its standard
-    /// deviations: `eᵀ S⁻¹ e`, `e` its residual at the current poses and
+    /// How far each of `edges` (not in the graph) is from what the graph says, in its
+    /// standard deviations: `eᵀ S⁻¹ e`, `e` its residual at the current poses and
     /// `S = J Σ Jᵀ + Ω⁻¹`, `Σ` the joint covariance of its two poses in the graph (the
-    /// blocks of `H⁻¹` at the current poses, the first pose exact) and `J` the residual's
-    /// Jacobian. About `χ²₃` if the edge measures the same poses as the graph's edges do;
-    /// a loop closure far beyond that puts the robot where the graph's measurements
-    /// cannot have it (a corridor's door matched to the next door). A direction the edge
-    /// does not measure (an eigenvalue of `Ω` below `10⁻¹²` of its largest) does not count.
-    pub fn consistency(&self, edge: &Edge) -> Result<f64, GraphError> {
+    /// blocks of `H⁻¹` at the current poses, the first pose exact; one factorisation for
+    /// all the edges) and `J` the residual's Jacobian. About `χ²₃` if the edge measures
+    /// the same poses as the graph's edges do; a loop closure far beyond that puts the
+    /// robot where the graph's measurements cannot have it (a corridor's door matched to
+    /// the next door). A direction the edge does not measure (an eigenvalue of `Ω` below
+    /// `10⁻¹²` of its largest) does not count.
+    pub fn consistency(&self, edges: &[Edge]) -> Result<Vec<f64>, GraphError> {
         let nodes = self.poses.len();
-        let (from, to) = (edge.from, edge.to);
-        if from >= nodes || to >= nodes || from == to {
-            return Err(GraphError::NoSuchNode { from, to, nodes });
+        for edge in edges {
+            let (from, to) = (edge.from, edge.to);
+            if from >= nodes || to >= nodes || from == to {
+                return Err(GraphError::NoSuchNode { from, to, nodes });
+            }
         }
-        let (pi, pj) = (&self.poses[from], &self.poses[to]);
-        let r = residual(edge, pi, pj);
-        let (ji, jj) = jacobians(edge, pi, pj);
+        if edges.is_empty() {
+            return Ok(Vec::new());
+        }
         let (h, _) = self.normal_equations()?;
         let llt = Llt::try_new_with_symbolic(symbolic_factor(&h)?, h.as_ref(), Side::Lower)
             .map_err(|_| GraphError::Singular)?;
-        // The columns of H⁻¹ of the edge's two poses (none for the fixed first pose).
+        // The columns of H⁻¹ of each edge's two poses, six per edge (none for the fixed
+        // first pose).
         let columns = |node: usize| node.checked_sub(1).map(|k| 3 * k);
-        let blocks = [(columns(from), ji), (columns(to), jj)];
-        let rhs = Mat::from_fn(h.nrows(), 6, |row, col| {
-            let start = blocks[col / 3].0;
-            f64::from(start.is_some_and(|k| row == k + col % 3))
+        let rhs = Mat::from_fn(h.nrows(), 6 * edges.len(), |row, col| {
+            let edge = &edges[col / 6];
+            let node = match col % 6 < 3 {
+                true => edge.from,
+                false => edge.to,
+            };
+            f64::from(columns(node).is_some_and(|k| row == k + col % 3))
         });
         let inverse = llt.solve(&rhs);
-        // J Σ Jᵀ over the two poses' blocks; Σ's block (a, c) is rows `ka..` of column
-        // block `c`.
-        let mut s = Matrix3::zeros();
-        for (ka, ja) in blocks.iter().filter_map(|(k, j)| k.map(|k| (k, j))) {
-            for (c, (_, jc)) in blocks.iter().enumerate() {
-                let sigma = Matrix3::from_fn(|row, col| inverse[(ka + row, 3 * c + col)]);
-                s += ja * sigma * jc.transpose();
-            }
-        }
-        let eigen = edge.information.symmetric_eigen();
-        let floor = eigen.eigenvalues.max() * 1e-12;
-        let variances = eigen.eigenvalues.map(|v| 1.0 / v.max(floor));
-        s += eigen.eigenvectors
-            * Matrix3::from_diagonal(&variances)
-            * eigen.eigenvectors.transpose();
-        let s = 0.5 * (s + s.transpose());
-        let chi2 = s
-            .cholesky()
-            .map(|c| r.dot(&c.solve(&r)))
-            .ok_or(GraphError::Singular)?;
-        match chi2.is_finite() {
-            true => Ok(chi2),
-            false => Err(GraphError::Singular),
-        }
+        edges
+            .iter()
+            .enumerate()
+            .map(|(n, edge)| {
+                let (pi, pj) = (&self.poses[edge.from], &self.poses[edge.to]);
+                let r = residual(edge, pi, pj);
+                let (ji, jj) = jacobians(edge, pi, pj);
+                let blocks = [(columns(edge.from), ji), (columns(edge.to), jj)];
+                // J Σ Jᵀ over the two poses' blocks; Σ's block (a, c) is rows `ka..` of
+                // the edge's column block `c`.
+                let mut s = Matrix3::zeros();
+                for (ka, ja) in blocks.iter().filter_map(|(k, j)| k.map(|k| (k, j))) {
+                    for (c, (_, jc)) in blocks.iter().enumerate() {
+                        let sigma =
+                            Matrix3::from_fn(|row, col| inverse[(ka + row, 6 * n + 3 * c + col)]);
+                        s += ja * sigma * jc.transpose();
+                    }
+                }
+                let eigen = edge.information.symmetric_eigen();
+                let floor = eigen.eigenvalues.max() * 1e-12;
+                let variances = eigen.eigenvalues.map(|v| 1.0 / v.max(floor));
+                s += eigen.eigenvectors
+                    * Matrix3::from_diagonal(&variances)
+                    * eigen.eigenvectors.transpose();
+                let s = 0.5 * (s + s.transpose());
+                let chi2 = s
+                    .cholesky()
+                    .map(|c| r.dot(&c.solve(&r)))
+                    .ok_or(GraphError::Singular)?;
+                match chi2.is_finite() {
+                    true => Ok(chi2),
+                    false => Err(GraphError::Singular),
+                }
+            })
+            .collect()
     }
 }
 
@@ -480,7 +498,7 @@ mod tests {
                 [sc, sc, 0.005],
             );
             let expected = d * d / ((b - a) as f64 * 0.05f64.powi(2) + sc * sc);
-            let chi2 = graph.consistency(&closure).unwrap();
+            let chi2 = graph.consistency(&[closure]).unwrap()[0];
             assert!(
                 (chi2 - expected).abs() <= 1e-6 * expected.max(1.0),
                 "{a} → {b}, {d} m: {chi2} against {expected}"
@@ -488,7 +506,20 @@ mod tests {
         }
         // Far beyond the uncertainty: 1 m over 5 steps of 5 cm is 8.8σ.
         let far = edge(2, 7, Pose2::new(6.0, 0.0, 0.0), [sc, sc, 0.005]);
-        assert!(graph.consistency(&far).unwrap() > 70.0);
+        assert!(graph.consistency(&[far]).unwrap()[0] > 70.0);
+        // Edges judged together (one factorisation) are judged as each alone.
+        let near = edge(0, 10, Pose2::new(10.3, 0.1, 0.01), [sc, sc, 0.005]);
+        let together = graph.consistency(&[near, far]).unwrap();
+        let alone = [
+            graph.consistency(&[near]).unwrap()[0],
+            graph.consistency(&[far]).unwrap()[0],
+        ];
+        for (t, a) in together.iter().zip(alone) {
+            assert!(
+                (t - a).abs() <= 1e-9 * a.max(1.0),
+                "{together:?} against {alone:?}"
+            );
+        }
     }
 
     #[test]
@@ -498,12 +529,12 @@ mod tests {
         let graph = straight_chain(6);
         let mut across = edge(0, 6, Pose2::new(9.0, 0.0, 0.0), [0.02, 0.02, 0.005]);
         across.information[(0, 0)] = 0.0;
-        assert!(graph.consistency(&across).unwrap() < 1e-6);
+        assert!(graph.consistency(&[across]).unwrap()[0] < 1e-6);
         across.measured.y = 0.5;
-        assert!(graph.consistency(&across).unwrap() > 1.0);
+        assert!(graph.consistency(&[across]).unwrap()[0] > 1.0);
         let missing = edge(0, 9, Pose2::new(9.0, 0.0, 0.0), [0.02, 0.02, 0.005]);
         assert!(matches!(
-            graph.consistency(&missing),
+            graph.consistency(&[missing]),
             Err(GraphError::NoSuchNode { .. })
         ));
     }
